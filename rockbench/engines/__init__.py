@@ -1,0 +1,20 @@
+"""Engines: the :class:`Engine` base class, the plugin registry and the plugins."""
+
+from rockbench.engines.base import Capabilities, Engine, angles_from_quaternions
+from rockbench.engines.registry import (
+    EngineInfo,
+    engine_class,
+    engine_info,
+    get_engine,
+    list_engines,
+    register,
+    resolve_engine_names,
+    unregister,
+)
+from rockbench.engines.settings import EngineSettings, SettingsError, parse_set_options
+
+__all__ = [
+    "Engine", "Capabilities", "EngineSettings", "SettingsError", "EngineInfo",
+    "angles_from_quaternions", "engine_class", "engine_info", "get_engine", "list_engines",
+    "register", "unregister", "resolve_engine_names", "parse_set_options",
+]

@@ -1,0 +1,277 @@
+"""The :class:`Engine` base class: one simulation loop shared by every physics engine.
+
+Contract for implementers (the numbered rules that every plugin follows)
+------------------------------------------------------------------------
+1. Subclass :class:`Engine`; set the class attributes ``name`` (the flag used on
+   the command line), ``capabilities`` (:class:`Capabilities`), ``Settings`` (a
+   frozen :class:`~rockbench.engines.settings.EngineSettings` dataclass whose
+   defaults are calibrated) and ``presets`` (at least ``"accurate"`` and
+   ``"fast"``, each a mapping of knob overrides, possibly empty).
+2. Implement :meth:`version` (the library's version string).
+3. Implement :meth:`_build`: create the minimal scene for the scenario: one
+   collision shape per block (box, or convex prism if chamfered), a ground/base
+   body whose top face is the plane z = 0, friction and restitution from
+   ``scenario.contact``, no hidden damping, no sleeping. Place block ``i``'s
+   centroid at ``scenario.initial_poses()`` (rotation θ0 about +y), at rest.
+   Return the physics time step actually used.
+4. Implement :meth:`_drive_base`: before a step starting at time ``t``, impose
+   the base motion from ``scenario.excitation`` (velocity and/or displacement,
+   never tilted gravity). It is called before every step while the base moves.
+5. Optionally implement :meth:`_fix_base` (called once when the excitation has
+   ended): make the base still and return True so that steps can be batched.
+6. Implement :meth:`_advance`: take ``n`` physics steps.
+7. Implement :meth:`_read_poses`: return an array (n_blocks, 7) with each block
+   centroid's world position (x, y, z) and orientation quaternion (w, x, y, z),
+   bottom block first. 2D engines map their plane to x–z and set y = 0.
+8. Optionally override :meth:`_check_supported` to raise
+   :class:`~rockbench.errors.UnsupportedScenario` for what the engine cannot
+   model, and :meth:`_teardown` to free native resources.
+9. Do not override :meth:`simulate`: it owns timing, sampling at the output
+   rate, NaN/explosion/energy-gain/overturning detection and the Trajectory.
+10. Register the class under the entry-point group ``rockbench.engines`` and run
+    :func:`rockbench.engines.testing.check_engine` on it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from rockbench.engines.settings import EngineSettings, SettingsError
+from rockbench.errors import UnsupportedScenario
+from rockbench.scenarios import Scenario
+from rockbench.trajectory import Status, Trajectory
+
+__all__ = ["Engine", "Capabilities", "angles_from_quaternions"]
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """What an engine can model.
+
+    Attributes
+    ----------
+    dimensions : int
+        2 for planar engines (x–z plane), 3 otherwise.
+    max_blocks : int or None
+        Largest stack it builds (None: no limit).
+    chamfer : bool
+        Whether chamfered (convex prism) blocks are modelled.
+    analytic : bool
+        True for reference solutions (not physics engines).
+    """
+
+    dimensions: int = 3
+    max_blocks: int | None = None
+    chamfer: bool = True
+    analytic: bool = False
+
+
+def angles_from_quaternions(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rocking angle about +y and out-of-plane wobble from unit quaternions (w, x, y, z).
+
+    θ = atan2(R02, R22) (the body z axis tilting toward +x is positive) and the
+    wobble is the angle between the body y axis and the world y axis.
+    """
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    r02 = 2.0 * (x * z + w * y)
+    r22 = 1.0 - 2.0 * (x * x + y * y)
+    r11 = 1.0 - 2.0 * (x * x + z * z)
+    return np.arctan2(r02, r22), np.arccos(np.clip(r11, -1.0, 1.0))
+
+
+class Engine(ABC):
+    """A physics engine behind one simulation loop (template method).
+
+    See the module docstring for the numbered contract. Users call
+    :meth:`simulate` only.
+    """
+
+    name: ClassVar[str]
+    capabilities: ClassVar[Capabilities] = Capabilities()
+    Settings: ClassVar[type[EngineSettings]]
+    presets: ClassVar[Mapping[str, Mapping[str, Any]]] = {"accurate": {}, "fast": {}}
+    #: Extra `pip install` hint shown when the library is missing.
+    install_hint: ClassVar[str] = ""
+
+    # ------------------------------------------------------------------ public API
+    @classmethod
+    @abstractmethod
+    def version(cls) -> str:
+        """Version of the underlying library."""
+
+    @classmethod
+    def settings(cls, preset: str | None = None, **overrides: Any) -> EngineSettings:
+        """Build settings from a preset name (or the defaults) plus knob overrides.
+
+        Raises
+        ------
+        SettingsError
+            Unknown preset or knob, or a value of the wrong type.
+        """
+        base = cls.Settings()
+        if preset not in (None, "default"):
+            if preset not in cls.presets:
+                raise SettingsError(
+                    f"engine {cls.name!r} has no preset {preset!r}; presets: "
+                    f"{', '.join(sorted(cls.presets))}"
+                )
+            base = base.replace(**cls.presets[preset])
+        return base.replace(**overrides) if overrides else base
+
+    def resolve_settings(self, settings: Any = None) -> EngineSettings:
+        """Accept None, a preset name, a mapping of overrides or a Settings instance."""
+        if settings is None or isinstance(settings, str):
+            return self.settings(settings)
+        if isinstance(settings, self.Settings):
+            return settings
+        if isinstance(settings, Mapping):
+            s = dict(settings)
+            return self.settings(s.pop("preset", None), **s)
+        raise SettingsError(
+            f"settings for {self.name!r} must be a preset name, a mapping or "
+            f"{self.Settings.__qualname__}, got {type(settings).__name__}"
+        )
+
+    def check_supported(self, scenario: Scenario) -> None:
+        """Raise :class:`UnsupportedScenario` if the engine cannot model ``scenario``."""
+        cap = self.capabilities
+        if cap.max_blocks is not None and scenario.n_blocks > cap.max_blocks:
+            raise UnsupportedScenario(
+                f"{self.name} models at most {cap.max_blocks} block(s), scenario has "
+                f"{scenario.n_blocks}"
+            )
+        if not cap.chamfer and any(b.chamfer > 0 for b in scenario.blocks):
+            raise UnsupportedScenario(f"{self.name} does not model chamfered blocks")
+        self._check_supported(scenario)
+
+    def simulate(self, scenario: Scenario, settings: Any = None) -> Trajectory:
+        """Run ``scenario`` and return its sampled :class:`Trajectory`.
+
+        Never raises for physics failures: NaN, explosions, energy gain and
+        overturning become the trajectory's ``status``; an unsupported scenario
+        returns status ``unsupported``. Bad settings raise :class:`SettingsError`.
+        """
+        s = self.resolve_settings(settings)
+        meta = dict(engine=self.name, engine_version=self.version(), settings=s.to_dict(),
+                    scenario=scenario.name)
+        try:
+            self.check_supported(scenario)
+        except UnsupportedScenario as exc:
+            return Trajectory.failed(Status.UNSUPPORTED, str(exc), n_blocks=scenario.n_blocks,
+                                     **meta)
+        start = time.perf_counter()
+        try:
+            traj = self._run(scenario, s, meta)
+        finally:
+            self._teardown()
+        traj.wall_time = time.perf_counter() - start
+        return traj
+
+    # ------------------------------------------------------------------ the loop
+    def _run(self, scenario: Scenario, settings: EngineSettings, meta: dict) -> Trajectory:
+        t_out = scenario.output_times()
+        n_out, nb = t_out.size, scenario.n_blocks
+        dt = float(self._build(scenario, settings))
+        # whole steps per output interval; the last sample may fall a fraction
+        # of a step early, which is far below the output resolution
+        k = max(1, int(round(1.0 / (scenario.output_rate * dt))))
+        exc = scenario.excitation
+        moving = not exc.is_free
+        watch = _Watchdog(scenario)
+        poses = np.full((n_out, nb, 7), np.nan)
+        poses[0] = self._read_poses()
+        status, message, last = Status.OK, "", n_out
+        step = 0
+        batched = not moving
+        for i in range(1, n_out):
+            if batched:
+                self._advance(k)
+                step += k
+            else:
+                for _ in range(k):
+                    self._drive_base(step * dt, dt)
+                    self._advance(1)
+                    step += 1
+                if step * dt > exc.end_time:
+                    batched = self._fix_base()
+            poses[i] = self._read_poses()
+            verdict = watch.check(poses[i], t_out[i])
+            if verdict is not None:
+                status, message = verdict
+                last = i + 1
+                break
+        meta["settings"] = {**meta["settings"], "effective_timestep": dt,
+                            "steps_per_sample": k}
+        p = poses[:last]
+        theta, wobble = angles_from_quaternions(p[..., 3:])
+        return Trajectory(t=t_out[:last], theta=theta, x=p[..., 0], z=p[..., 2], wobble=wobble,
+                          status=status, message=message, **meta)
+
+    # ------------------------------------------------------------------ hooks
+    @abstractmethod
+    def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
+        """Create the scene (rule 3); return the physics time step in s."""
+
+    @abstractmethod
+    def _drive_base(self, t: float, dt: float) -> None:
+        """Impose the base motion for the step [t, t + dt] (rule 4)."""
+
+    def _fix_base(self) -> bool:
+        """Hold the base still after the excitation (rule 5); True if steps may be batched."""
+        return False
+
+    @abstractmethod
+    def _advance(self, n: int) -> None:
+        """Take ``n`` physics steps (rule 6)."""
+
+    @abstractmethod
+    def _read_poses(self) -> np.ndarray:
+        """Block centroid poses, shape (n_blocks, 7): x, y, z, qw, qx, qy, qz (rule 7)."""
+
+    def _check_supported(self, scenario: Scenario) -> None:  # noqa: B027 - optional hook
+        """Engine-specific support check (rule 8); raise UnsupportedScenario."""
+
+    def _teardown(self) -> None:  # noqa: B027 - optional hook
+        """Free native resources after a run (rule 8)."""
+
+
+class _Watchdog:
+    """Detects NaN, explosions, energy gain in free motion and overturning from poses."""
+
+    def __init__(self, scenario: Scenario) -> None:
+        self.masses = np.array([b.m for b in scenario.blocks])
+        height = scenario.stack.total_height
+        exc = scenario.excitation
+        t = np.linspace(0.0, min(scenario.duration, max(exc.end_time, 0.0)), 2001)
+        u_base = float(np.max(np.abs(exc.displacement(t)))) if t[-1] > 0 else 0.0
+        # a falling block cannot leave a ball of a few stack heights around its start
+        self.reach = 3.0 * height + 2.0 * u_base + 1.0
+        c, _ = scenario.initial_poses()
+        self.start = c
+        self.free = exc.is_free
+        mgz0 = float(self.masses @ c[:, 1])
+        mgz_up = float(self.masses @ scenario.stack.centroids[:, 1])
+        # potential energy may not rise above its start in free motion, beyond
+        # the contact penetration noise of a soft engine
+        self.z_limit = mgz0 + 0.02 * abs(mgz0 - mgz_up) + 1e-4 * self.masses.sum() * height
+
+    def check(self, pose: np.ndarray, t: float) -> tuple[Status, str] | None:
+        if not np.all(np.isfinite(pose)):
+            return Status.UNSTABLE, f"NaN or infinite pose at t = {t:.4g} s"
+        xz = pose[:, [0, 2]]
+        if np.max(np.linalg.norm(xz - self.start, axis=1)) > self.reach:
+            return Status.UNSTABLE, f"explosion: a block left the scene at t = {t:.4g} s"
+        theta, _ = angles_from_quaternions(pose[:, 3:])
+        if np.max(np.abs(theta)) >= 0.5 * math.pi:
+            i = int(np.argmax(np.abs(theta)))
+            return Status.OVERTURNED, f"block {i + 1} overturned at t = {t:.4g} s"
+        if self.free and float(self.masses @ pose[:, 2]) > self.z_limit:
+            return Status.UNSTABLE, f"energy gain in free motion at t = {t:.4g} s"
+        return None

@@ -1,0 +1,133 @@
+"""Engine settings: frozen dataclasses of knobs, with presets and string overrides."""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import types
+import typing
+from collections.abc import Mapping
+from typing import Any
+
+from rockbench.errors import RockbenchError
+
+__all__ = ["EngineSettings", "SettingsError", "parse_set_options"]
+
+
+class SettingsError(RockbenchError, ValueError):
+    """An engine knob does not exist or its value has the wrong type."""
+
+
+_TRUE = {"1", "true", "yes", "on"}
+_FALSE = {"0", "false", "no", "off"}
+
+
+def _coerce(value: Any, kind: Any, name: str) -> Any:
+    """Convert a (possibly string) value to the annotated type of a knob."""
+    origin = typing.get_origin(kind)
+    args = typing.get_args(kind)
+    if origin is typing.Union or origin is types.UnionType:
+        non_none = [a for a in args if a is not type(None)]
+        if value is None or (isinstance(value, str) and value.lower() == "none"):
+            return None
+        return _coerce(value, non_none[0], name)
+    if origin is typing.Literal:
+        if value not in args:
+            raise SettingsError(f"{name} must be one of {', '.join(map(str, args))}, got {value!r}")
+        return value
+    if origin is tuple:
+        if isinstance(value, str):
+            value = [v for v in value.replace("(", "").replace(")", "").split(",") if v.strip()]
+        elem = args[0] if args else float
+        return tuple(_coerce(v, elem, name) for v in value)
+    try:
+        if kind is bool:
+            if isinstance(value, str):
+                if value.lower() in _TRUE:
+                    return True
+                if value.lower() in _FALSE:
+                    return False
+                raise ValueError(value)
+            return bool(value)
+        if kind is int:
+            f = float(value)
+            if f != int(f):
+                raise ValueError(value)
+            return int(f)
+        if kind is float:
+            return float(value)
+        if kind is str:
+            return str(value)
+    except (TypeError, ValueError):
+        raise SettingsError(
+            f"{name} must be of type {getattr(kind, '__name__', kind)}, got {value!r}"
+        ) from None
+    return value
+
+
+@dataclasses.dataclass(frozen=True)
+class EngineSettings:
+    """Base class of every engine's knobs.
+
+    Subclasses are frozen dataclasses whose fields are the knobs, with the
+    calibrated defaults. Field types drive the conversion of ``--set`` strings.
+    """
+
+    def replace(self, **overrides: Any) -> EngineSettings:
+        """A copy with some knobs changed; values may be strings (converted by type)."""
+        hints = typing.get_type_hints(type(self))
+        names = {f.name for f in dataclasses.fields(self)}
+        clean = {}
+        for key, val in overrides.items():
+            if key not in names:
+                raise SettingsError(f"{type(self).__qualname__} has no knob {key!r}; "
+                                    f"knobs: {', '.join(sorted(names))}")
+            clean[key] = _coerce(val, hints[key], key)
+        try:
+            return dataclasses.replace(self, **clean)
+        except ValueError as exc:  # validation in a subclass __post_init__
+            raise SettingsError(str(exc)) from None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-able dictionary of the knobs."""
+        return {
+            k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(self).items()
+        }
+
+    def digest(self) -> str:
+        """Short stable hash of the knob values (for result tables and caches)."""
+        text = json.dumps(self.to_dict(), sort_keys=True, default=str)
+        return hashlib.sha1(text.encode()).hexdigest()[:10]
+
+    @classmethod
+    def knobs(cls) -> dict[str, str]:
+        """Knob names with their type names."""
+        hints = typing.get_type_hints(cls)
+        return {f.name: str(hints[f.name]) for f in dataclasses.fields(cls)}
+
+
+def parse_set_options(options: list[str] | None) -> dict[str, dict[str, str]]:
+    """Parse ``engine.knob=value`` strings into ``{engine: {knob: value}}``.
+
+    Raises
+    ------
+    SettingsError
+        If an option does not have the form ``engine.knob=value``.
+    """
+    out: dict[str, dict[str, str]] = {}
+    for opt in options or []:
+        key, sep, value = opt.partition("=")
+        engine, dot, knob = key.strip().partition(".")
+        if not (sep and dot and engine and knob):
+            raise SettingsError(f"--set expects engine.knob=value, got {opt!r}")
+        out.setdefault(engine, {})[knob.strip()] = value.strip()
+    return out
+
+
+def merge_overrides(*maps: Mapping[str, Any] | None) -> dict[str, Any]:
+    """Merge override mappings, later ones winning."""
+    out: dict[str, Any] = {}
+    for m in maps:
+        out.update(m or {})
+    return out

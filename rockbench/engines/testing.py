@@ -1,0 +1,234 @@
+"""Conformance kit for engine plugins (in the spirit of scikit-learn's ``check_estimator``).
+
+Every check takes an engine instance (and optional settings), runs small
+scenarios and raises :class:`AssertionError` with a physical explanation when
+the engine misbehaves. :func:`conformance_checks` picks the checks that apply
+to an engine's capabilities; :func:`check_engine` runs them all.
+
+Example
+-------
+>>> from rockbench.engines import get_engine
+>>> from rockbench.engines.testing import check_engine
+>>> check_engine(get_engine("mujoco"))  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rockbench import analytic
+from rockbench.engines.base import Engine
+from rockbench.metrics import impact_times, max_error
+from rockbench.scenarios import Block, Scenario, SinePulse, Stack, scenario_to_dict
+from rockbench.scenarios.catalog import SINGLE2, STACK2
+from rockbench.trajectory import Status, Trajectory
+
+__all__ = ["Tolerances", "conformance_checks", "check_engine"]
+
+#: The B2 block of the paper (0.5 × 0.2 × 1.0 m, 1 kg): λ = 0.4636 rad.
+B2 = Block(width=0.5, depth=0.2, height=1.0, mass=1.0)
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Bounds used by the checks (defaults are the project's conformance bounds).
+
+    Attributes
+    ----------
+    rest : float
+        Largest |θ|/λ allowed for a block that should stay at rest.
+    free_error : float
+        Largest max |θ − θ_ref|/λ over the first three impacts of free rocking.
+    impact_time : float
+        Largest relative error of the first three impact times.
+    peak : float
+        Largest relative error of the peak |θ| under a sine pulse.
+    mirror : float
+        Largest |θ(+) + θ(−)|/λ for mirrored scenarios.
+    """
+
+    rest: float = 2e-3
+    free_error: float = 0.02
+    impact_time: float = 0.02
+    peak: float = 0.05
+    mirror: float = 0.01
+
+
+def _scenario(name: str, stack: Stack | Block, **kw: Any) -> Scenario:
+    return Scenario(name=f"conformance-{name}", stack=stack, **kw)
+
+
+def _run(engine: Engine, scenario: Scenario, settings: Any) -> Trajectory:
+    traj = engine.simulate(scenario, settings)
+    assert traj.status in (Status.OK, Status.OVERTURNED), (
+        f"{engine.name} on {scenario.name}: status {traj.status} ({traj.message})"
+    )
+    return traj
+
+
+def check_rest(engine: Engine, settings: Any = None, tol: Tolerances = Tolerances()) -> None:
+    """An upright block on a still base stays upright and in place (no drift, no creep)."""
+    sc = _scenario("rest", B2, duration=2.0, output_rate=200.0)
+    traj = _run(engine, sc, settings)
+    lam = sc.critical_angle
+    assert traj.status is Status.OK, f"resting block ended {traj.status}: {traj.message}"
+    worst = float(np.max(np.abs(traj.theta))) / lam
+    assert worst <= tol.rest, f"resting block rotated to {worst:.2e} λ (limit {tol.rest:.0e} λ)"
+    drift = float(np.max(np.abs(traj.x - traj.x[0])))
+    assert drift <= 1e-3 * B2.height, f"resting block drifted {drift:.2e} m"
+
+
+def check_free_rocking(engine: Engine, settings: Any = None,
+                       tol: Tolerances = Tolerances()) -> None:
+    """Free rocking of B2 from 0.5 λ follows Housner over the first three impacts."""
+    sc = _scenario("free", B2, initial_tilt=0.5, duration=3.0, output_rate=1000.0)
+    ref = analytic.reference(sc)
+    traj = _run(engine, sc, settings)
+    t_ref = impact_times(ref)[:3]
+    t_eng = impact_times(traj)[:3]
+    assert t_eng.size == 3, f"expected 3 impacts within 3 s, engine showed {t_eng.size}"
+    rel = np.abs(t_eng - t_ref) / t_ref
+    assert np.all(rel <= tol.impact_time), (
+        f"impact times {np.round(t_eng, 4)} vs Housner {np.round(t_ref, 4)}: "
+        f"errors {np.round(rel * 100, 2)} % (limit {tol.impact_time * 100:g} %)"
+    )
+    err = max_error(traj, ref, sc.critical_angle, t_end=float(t_ref[2]) + 0.05)
+    assert err <= tol.free_error, (
+        f"max |θ − θ_Housner| = {err:.4f} λ over 3 impacts (limit {tol.free_error} λ)"
+    )
+
+
+def check_subthreshold(engine: Engine, settings: Any = None,
+                       tol: Tolerances = Tolerances()) -> None:
+    """A base pulse below the uplift threshold g·tan λ does not lift the block."""
+    lam = SINGLE2.rocking().lam
+    f = 3.0
+    amp = 0.8 * 9.81 * math.tan(lam) / (2 * math.pi * f) ** 2
+    sc = _scenario("subthreshold", SINGLE2, excitation=SinePulse(f, amp), duration=1.0)
+    traj = _run(engine, sc, settings)
+    worst = float(np.max(np.abs(traj.theta))) / lam
+    assert worst <= 5 * tol.rest, (
+        f"a pulse at 0.8 × the uplift threshold rotated the block to {worst:.2e} λ"
+    )
+    # the block rides with the base: it must have moved by the pulse's displacement
+    moved = traj.x[-1, 0] - traj.x[0, 0]
+    expect = float(sc.excitation.displacement(sc.duration))
+    assert abs(moved - expect) <= 0.05 * abs(expect) + 1e-4, (
+        f"block moved {moved:.4g} m, the base {expect:.4g} m: the base does not drag it"
+    )
+
+
+def check_mirror_symmetry(engine: Engine, settings: Any = None,
+                          tol: Tolerances = Tolerances()) -> None:
+    """Mirrored initial tilt and mirrored base motion give mirrored rocking."""
+    for name, kw_pos, kw_neg in (
+        ("tilt", dict(initial_tilt=0.5), dict(initial_tilt=-0.5)),
+        ("pulse", dict(excitation=SinePulse(3.0, 0.008)),
+         dict(excitation=SinePulse(3.0, -0.008))),
+    ):
+        block = B2 if name == "tilt" else SINGLE2
+        pos = _run(engine, _scenario(f"mirror-{name}+", block, duration=1.5, **kw_pos), settings)
+        neg = _run(engine, _scenario(f"mirror-{name}-", block, duration=1.5, **kw_neg), settings)
+        lam = block.rocking().lam
+        n = min(pos.t.size, neg.t.size)
+        asym = float(np.max(np.abs(pos.theta[:n] + neg.theta[:n]))) / lam
+        assert asym <= tol.mirror, f"{name}: mirrored runs differ by {asym:.2e} λ"
+
+
+def check_determinism(engine: Engine, settings: Any = None,
+                      tol: Tolerances = Tolerances()) -> None:
+    """Two identical runs give identical trajectories."""
+    sc = _scenario("determinism", SINGLE2, excitation=SinePulse(3.0, 0.008), duration=1.0)
+    a = _run(engine, sc, settings)
+    b = _run(engine, sc, settings)
+    assert a.status == b.status and np.array_equal(a.theta, b.theta), (
+        "two identical runs differ"
+    )
+
+
+def check_overturning(engine: Engine, settings: Any = None,
+                      tol: Tolerances = Tolerances()) -> None:
+    """A pulse that overturns the Housner block is reported as ``overturned``."""
+    lam = SINGLE2.rocking().lam
+    f = 1.0
+    amp = 3.0 * 9.81 * math.tan(lam) / (2 * math.pi * f) ** 2
+    sc = _scenario("overturn", SINGLE2, excitation=SinePulse(f, amp), duration=3.0)
+    ref = analytic.reference(sc)
+    assert ref.status is Status.OVERTURNED, "test case no longer overturns analytically"
+    traj = engine.simulate(sc, settings)
+    assert traj.status is Status.OVERTURNED, (
+        f"expected overturned, got {traj.status} ({traj.message}); "
+        f"max |θ| = {np.max(np.abs(traj.theta)):.3f} rad"
+    )
+
+
+def check_scenario_not_mutated(engine: Engine, settings: Any = None,
+                               tol: Tolerances = Tolerances()) -> None:
+    """simulate() leaves the scenario unchanged."""
+    sc = _scenario("mutation", B2, initial_tilt=0.3, duration=0.2)
+    before = scenario_to_dict(sc)
+    engine.simulate(sc, settings)
+    assert scenario_to_dict(sc) == before, "the scenario was modified by simulate()"
+
+
+def check_stack_rest(engine: Engine, settings: Any = None,
+                     tol: Tolerances = Tolerances()) -> None:
+    """The paper's chamfered two-block stack stays at rest on a still base."""
+    sc = _scenario("stack-rest", STACK2, duration=1.0, output_rate=200.0)
+    traj = _run(engine, sc, settings)
+    worst = float(np.max(np.abs(traj.theta))) / sc.critical_angle
+    assert traj.status is Status.OK and worst <= tol.rest, (
+        f"resting stack: status {traj.status}, max |θ| = {worst:.2e} λ"
+    )
+
+
+def check_forced_peak(engine: Engine, settings: Any = None,
+                      tol: Tolerances = Tolerances()) -> None:
+    """The peak rocking angle under the paper's 3 Hz / 8 mm sine pulse matches Housner."""
+    sc = _scenario("forced", SINGLE2, excitation=SinePulse(3.0, 0.008), duration=2.0)
+    ref = analytic.reference(sc)
+    traj = _run(engine, sc, settings)
+    p_ref = float(np.max(np.abs(ref.theta)))
+    p_eng = float(np.max(np.abs(traj.theta)))
+    rel = abs(p_eng - p_ref) / p_ref
+    assert rel <= tol.peak, (
+        f"peak |θ| {p_eng:.5f} rad vs Housner {p_ref:.5f} rad ({rel * 100:.2f} %, "
+        f"limit {tol.peak * 100:g} %)"
+    )
+
+
+Check = Callable[..., None]
+
+
+def conformance_checks(engine: Engine) -> list[tuple[str, Check]]:
+    """The checks that apply to ``engine``'s capabilities, as (name, function) pairs.
+
+    Comparisons with the analytic reference are left out for the reference itself,
+    where they could not fail.
+    """
+    cap = engine.capabilities
+    checks: list[Check] = [check_rest, check_subthreshold, check_mirror_symmetry,
+                           check_determinism, check_overturning, check_scenario_not_mutated]
+    if not cap.analytic:
+        checks += [check_free_rocking, check_forced_peak]
+    if cap.max_blocks is None or cap.max_blocks >= 2:
+        checks.append(check_stack_rest)
+    return [(c.__name__.removeprefix("check_"), c) for c in checks]
+
+
+def check_engine(engine: Engine, settings: Any = None, tol: Tolerances = Tolerances()) -> None:
+    """Run every applicable check; raise AssertionError listing all failures."""
+    failures = []
+    for name, check in conformance_checks(engine):
+        try:
+            check(engine, settings, tol)
+        except AssertionError as exc:
+            failures.append(f"{name}: {exc}")
+    if failures:
+        raise AssertionError(f"{engine.name} fails {len(failures)} check(s):\n" +
+                             "\n".join(failures))

@@ -1,0 +1,34 @@
+"""Scenarios: what is simulated (blocks, stacks, contact, base excitation), files and catalog."""
+
+from rockbench.scenarios.excitation import (
+    STANDARD_GRAVITY,
+    Excitation,
+    Free,
+    Record,
+    SinePulse,
+    Sinusoid,
+)
+from rockbench.scenarios.model import Block, Contact, RockingProperties, Scenario, Stack
+
+__all__ = [
+    "Block", "Stack", "Contact", "Scenario", "RockingProperties",
+    "Excitation", "Free", "SinePulse", "Sinusoid", "Record", "STANDARD_GRAVITY",
+]
+from rockbench.scenarios.catalog import (  # noqa: E402
+    catalog,
+    get_scenario,
+    get_suite,
+    resolve_scenarios,
+    suites,
+)
+from rockbench.scenarios.files import (  # noqa: E402
+    load_scenario,
+    save_scenario,
+    scenario_from_dict,
+    scenario_to_dict,
+)
+
+__all__ += [
+    "catalog", "get_scenario", "get_suite", "resolve_scenarios", "suites",
+    "load_scenario", "save_scenario", "scenario_from_dict", "scenario_to_dict",
+]

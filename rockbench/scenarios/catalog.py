@@ -1,0 +1,149 @@
+"""Built-in catalog: every case of Giordano et al. (2025), and named suites.
+
+Names follow DESIGN.md: ``free-b0``, ``free-b1-0.5``, ``single-pulse-3.0hz-8mm``,
+``stack-sine-5.0hz-4mm``, ... Suites group them (``paper-free``, ``paper``, ``smoke``...).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+from rockbench.errors import UnknownScenario
+from rockbench.scenarios.excitation import SinePulse, Sinusoid
+from rockbench.scenarios.files import load_scenario
+from rockbench.scenarios.model import Block, Contact, Scenario, Stack
+
+__all__ = ["catalog", "get_scenario", "suites", "get_suite", "resolve_scenarios",
+           "FREE_BLOCKS", "SINGLE_CASES", "STACK_CASES"]
+
+#: Free-rocking blocks of the paper's Section 4: (width, depth, height) in m, mass 1 kg.
+FREE_BLOCKS = {
+    "b0": (1.00, 0.20, 5.00),
+    "b1": (0.50, 0.20, 0.75),
+    "b2": (0.50, 0.20, 1.00),
+    "b3": (0.50, 0.20, 1.25),
+}
+FREE_TILTS = (0.2, 0.5, 0.99)
+#: Single #2 inputs (Hz, mm), Tables 6 and 7.
+SINGLE_CASES = ((3.0, 8), (3.3, 6), (3.3, 8), (5.0, 4), (5.0, 5), (5.0, 6))
+#: Two-block inputs (Hz, mm), Tables 9-12.
+STACK_CASES = ((3.3, 4), (4.0, 3), (4.0, 4), (4.0, 5), (5.0, 2), (5.0, 3), (5.0, 4), (6.5, 2))
+
+FREE_DURATION = 20.0
+PULSE_DURATION = 4.0
+SINE_DURATION = 10.0
+RATE = 1000.0
+PAPER = "Giordano et al. (2025), doi:10.1016/j.istruc.2025.110027"
+
+#: Peña et al. (2008) granite block "Single #2": the 0.17 m side rocks.
+SINGLE2 = Block(width=0.17, depth=0.502, height=1.0, density=2670.0)
+#: Peña et al. (2008) two-block specimen, 5 mm chamfers.
+STACK2 = Stack((
+    Block(width=0.20, depth=0.40, height=0.60, density=2670.0, chamfer=0.005),
+    Block(width=0.15, depth=0.55, height=0.60, density=2670.0, chamfer=0.005),
+))
+
+
+def _hzmm(f: float, a_mm: int) -> str:
+    return f"{f:.1f}hz-{a_mm}mm"
+
+
+def _build() -> dict[str, Callable[[], Scenario]]:
+    cat: dict[str, Callable[[], Scenario]] = {}
+    for key, (w, d, h) in FREE_BLOCKS.items():
+        tilts = (0.5,) if key == "b0" else FREE_TILTS
+        for tilt in tilts:
+            name = f"free-{key}" if key == "b0" else f"free-{key}-{tilt}"
+            cat[name] = lambda name=name, w=w, d=d, h=h, tilt=tilt, key=key: Scenario(
+                name=name, stack=Stack((Block(w, d, h, mass=1.0),)), initial_tilt=tilt,
+                duration=FREE_DURATION, output_rate=RATE,
+                description=f"{key.upper()} free rocking from {tilt} λ ({PAPER}, Section 4)",
+            )
+    for kind, exc_cls, dur in (("pulse", SinePulse, PULSE_DURATION),
+                               ("sine", Sinusoid, SINE_DURATION)):
+        for f, a in SINGLE_CASES:
+            name = f"single-{kind}-{_hzmm(f, a)}"
+            cat[name] = lambda name=name, f=f, a=a, exc_cls=exc_cls, dur=dur, kind=kind: Scenario(
+                name=name, stack=Stack((SINGLE2,)), contact=Contact(friction=1.0),
+                excitation=exc_cls(frequency=f, amplitude=a / 1000.0), duration=dur,
+                output_rate=RATE,
+                description=f"Single #2 block, {f} Hz / {a} mm {kind} ({PAPER}, Section 5)",
+            )
+        for f, a in STACK_CASES:
+            name = f"stack-{kind}-{_hzmm(f, a)}"
+            cat[name] = lambda name=name, f=f, a=a, exc_cls=exc_cls, dur=dur, kind=kind: Scenario(
+                name=name, stack=STACK2, contact=Contact(friction=1.0),
+                excitation=exc_cls(frequency=f, amplitude=a / 1000.0), duration=dur,
+                output_rate=RATE,
+                description=f"two stacked blocks, {f} Hz / {a} mm {kind} ({PAPER}, Section 6)",
+            )
+    return cat
+
+
+_CATALOG = _build()
+
+
+def catalog() -> list[str]:
+    """Names of every built-in scenario."""
+    return list(_CATALOG)
+
+
+def get_scenario(name: str) -> Scenario:
+    """A catalog scenario by name, or a scenario read from a ``.toml`` file path.
+
+    Raises
+    ------
+    UnknownScenario
+        Neither a catalog name nor an existing ``.toml`` file (with a "did you mean").
+    ScenarioError
+        The file exists but is invalid.
+    """
+    if name in _CATALOG:
+        return _CATALOG[name]()
+    if name.endswith(".toml") or Path(name).exists():
+        return load_scenario(name)
+    raise UnknownScenario(name, list(_CATALOG))
+
+
+def suites() -> dict[str, list[str]]:
+    """Named suites: suite name → scenario names."""
+    names = list(_CATALOG)
+    groups = {
+        "paper-free": [n for n in names if n.startswith("free-")],
+        "paper-single-pulse": [n for n in names if n.startswith("single-pulse-")],
+        "paper-single-sine": [n for n in names if n.startswith("single-sine-")],
+        "paper-stack-pulse": [n for n in names if n.startswith("stack-pulse-")],
+        "paper-stack-sine": [n for n in names if n.startswith("stack-sine-")],
+    }
+    groups["paper"] = [n for g in groups.values() for n in g]
+    groups["smoke"] = ["free-b2-0.5", "single-pulse-3.0hz-8mm", "stack-pulse-4.0hz-4mm"]
+    return groups
+
+
+def get_suite(name: str) -> list[str]:
+    """Scenario names of a suite.
+
+    Raises
+    ------
+    UnknownScenario
+        No such suite (with a "did you mean").
+    """
+    s = suites()
+    if name not in s:
+        raise UnknownScenario(name, list(s), kind="suite")
+    return list(s[name])
+
+
+def resolve_scenarios(spec: str) -> list[Scenario]:
+    """Scenarios from a comma list of catalog names, suite names and ``.toml`` files."""
+    out: list[Scenario] = []
+    s = suites()
+    for item in (x.strip() for x in spec.split(",")):
+        if not item:
+            continue
+        if item in s:
+            out += [get_scenario(n) for n in s[item]]
+        else:
+            out.append(get_scenario(item))
+    return out

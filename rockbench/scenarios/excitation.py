@@ -1,0 +1,472 @@
+"""Base excitations: horizontal ground motion along +x, starting from rest.
+
+Every excitation returns acceleration, velocity and displacement that are exact
+integrals of each other (closed forms for pulses and sinusoids, exact piecewise
+polynomial integration for records), so that an engine driven by displacement or
+velocity and an analytic model driven by acceleration see the same motion.
+Functions accept scalars or arrays of times and return the same shape.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from rockbench.errors import ScenarioError
+
+__all__ = ["Excitation", "Free", "SinePulse", "Sinusoid", "Record", "STANDARD_GRAVITY"]
+
+#: Conversion factor for records given in units of g.
+STANDARD_GRAVITY = 9.80665
+
+ArrayLike = float | np.ndarray
+
+
+def _finite_positive(value: float, what: str, allow_zero: bool = False) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ScenarioError(f"{what} must be a number, got {value!r}") from None
+    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+        bound = ">= 0" if allow_zero else "> 0"
+        raise ScenarioError(f"{what} must be finite and {bound}, got {value!r}")
+    return v
+
+
+class Excitation(ABC):
+    """Horizontal base motion u_g(t) along +x, at rest at t = 0."""
+
+    #: Name used in scenario files.
+    kind: ClassVar[str]
+
+    @abstractmethod
+    def acceleration(self, t: ArrayLike) -> ArrayLike:
+        """Base acceleration ü_g(t) in m/s²."""
+
+    @abstractmethod
+    def velocity(self, t: ArrayLike) -> ArrayLike:
+        """Base velocity u̇_g(t) in m/s (exact integral of the acceleration)."""
+
+    @abstractmethod
+    def displacement(self, t: ArrayLike) -> ArrayLike:
+        """Base displacement u_g(t) in m (exact integral of the velocity)."""
+
+    @property
+    def end_time(self) -> float:
+        """Time after which the base stands still (``inf`` if never)."""
+        return math.inf
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        """Times where ü_g is not smooth; ODE integrators restart there."""
+        return ()
+
+    @property
+    def is_free(self) -> bool:
+        """True when the base never moves."""
+        return False
+
+    def peak_acceleration(self, t_end: float = math.inf) -> float:
+        """Largest |ü_g| over [0, t_end] (sampled finely)."""
+        t_end = min(t_end, self.end_time if math.isfinite(self.end_time) else t_end)
+        if not math.isfinite(t_end) or t_end <= 0:
+            return 0.0
+        t = np.linspace(0.0, t_end, 20001)
+        return float(np.max(np.abs(self.acceleration(t))))
+
+    @abstractmethod
+    def to_dict(self) -> dict[str, Any]:
+        """Scenario-file representation (``type`` plus fields)."""
+
+
+@dataclass(frozen=True)
+class Free(Excitation):
+    """No base motion (free rocking from an initial tilt)."""
+
+    kind: ClassVar[str] = "free"
+
+    def acceleration(self, t: ArrayLike) -> ArrayLike:
+        return np.zeros_like(np.asarray(t, float)) + 0.0
+
+    velocity = acceleration
+    displacement = acceleration
+
+    @property
+    def end_time(self) -> float:
+        return 0.0
+
+    @property
+    def is_free(self) -> bool:
+        return True
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"type": self.kind}
+
+
+@dataclass(frozen=True)
+class SinePulse(Excitation):
+    """One-sine acceleration pulse ü_g = A ω² sin(ωt) for 0 ≤ t ≤ cycles/f, then 0.
+
+    Parameters
+    ----------
+    frequency : float
+        f in Hz (ω = 2πf).
+    amplitude : float
+        Displacement amplitude A in m; the peak acceleration is A ω².
+        A negative value reverses the pulse.
+    cycles : int
+        Number of full cycles (default 1). The base ends at rest, displaced by
+        2π·cycles·A.
+    """
+
+    frequency: float
+    amplitude: float
+    cycles: int = 1
+    kind: ClassVar[str] = "sine-pulse"
+
+    def __post_init__(self) -> None:
+        _finite_positive(self.frequency, "sine-pulse frequency")
+        if not math.isfinite(float(self.amplitude)):
+            raise ScenarioError(f"sine-pulse amplitude must be finite, got {self.amplitude!r}")
+        if int(self.cycles) != self.cycles or self.cycles < 1:
+            raise ScenarioError(
+                f"sine-pulse cycles must be a positive integer, got {self.cycles!r}"
+            )
+
+    @property
+    def omega(self) -> float:
+        """Circular frequency ω = 2πf."""
+        return 2.0 * math.pi * self.frequency
+
+    @property
+    def end_time(self) -> float:
+        return self.cycles / self.frequency
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        return (self.end_time,)
+
+    def _clip(self, t: ArrayLike) -> np.ndarray:
+        return np.clip(np.asarray(t, float), 0.0, self.end_time)
+
+    def acceleration(self, t: ArrayLike) -> ArrayLike:
+        t = np.asarray(t, float)
+        w = self.omega
+        inside = (t >= 0) & (t <= self.end_time)
+        return np.where(inside, self.amplitude * w * w * np.sin(w * t), 0.0)
+
+    def velocity(self, t: ArrayLike) -> ArrayLike:
+        tc = self._clip(t)
+        w = self.omega
+        return self.amplitude * w * (1.0 - np.cos(w * tc))
+
+    def displacement(self, t: ArrayLike) -> ArrayLike:
+        t = np.asarray(t, float)
+        tc = self._clip(t)
+        w = self.omega
+        u = self.amplitude * (w * tc - np.sin(w * tc))
+        # after the pulse the base is at rest (velocity 0), so u stays constant
+        return np.where(t < 0, 0.0, u)
+
+    def peak_acceleration(self, t_end: float = math.inf) -> float:
+        return abs(self.amplitude) * self.omega**2
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"type": self.kind, "frequency": self.frequency, "amplitude": self.amplitude,
+                "cycles": self.cycles}
+
+
+@dataclass(frozen=True)
+class Sinusoid(Excitation):
+    """Harmonic displacement u_g = A sin(ωt)·w(t) with smooth sin² ramps.
+
+    Parameters
+    ----------
+    frequency : float
+        f in Hz.
+    amplitude : float
+        Displacement amplitude A in m (peak acceleration ≈ A ω²).
+    duration : float or None
+        Length of the motion in s. ``None`` means it lasts the whole scenario
+        with no ramp-down. With a duration, the window also ramps down over the
+        last ``ramp_cycles`` cycles so that the base ends at rest.
+    ramp_cycles : float
+        Length of the sin² ramp in cycles (default 1). ``0`` gives an impulsive
+        start (u̇_g(0) = Aω); use it only when a study asks for it.
+    """
+
+    frequency: float
+    amplitude: float
+    duration: float | None = None
+    ramp_cycles: float = 1.0
+    kind: ClassVar[str] = "sinusoid"
+
+    def __post_init__(self) -> None:
+        _finite_positive(self.frequency, "sinusoid frequency")
+        if not math.isfinite(float(self.amplitude)):
+            raise ScenarioError(f"sinusoid amplitude must be finite, got {self.amplitude!r}")
+        _finite_positive(self.ramp_cycles, "sinusoid ramp_cycles", allow_zero=True)
+        if self.duration is not None:
+            _finite_positive(self.duration, "sinusoid duration")
+            if 2 * self.ramp_time > self.duration + 1e-12:
+                raise ScenarioError(
+                    f"sinusoid duration {self.duration} s is shorter than its two ramps "
+                    f"({2 * self.ramp_time:g} s)"
+                )
+
+    @property
+    def omega(self) -> float:
+        """Circular frequency ω = 2πf."""
+        return 2.0 * math.pi * self.frequency
+
+    @property
+    def ramp_time(self) -> float:
+        """Length of each ramp in s."""
+        return self.ramp_cycles / self.frequency
+
+    @property
+    def end_time(self) -> float:
+        return math.inf if self.duration is None else float(self.duration)
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        pts = [self.ramp_time] if self.ramp_time > 0 else []
+        if self.duration is not None:
+            pts += [self.duration - self.ramp_time, self.duration]
+        return tuple(sorted(set(pts)))
+
+    def _window(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Window w and its first two derivatives."""
+        w = np.ones_like(t)
+        dw = np.zeros_like(t)
+        ddw = np.zeros_like(t)
+        tr = self.ramp_time
+        if tr > 0:
+            k = math.pi / tr
+            ramps = [(t < tr, t, 1.0)]
+            if self.duration is not None:
+                ramps.append((t > self.duration - tr, self.duration - t, -1.0))
+            for mask, s, sign in ramps:
+                # w = sin²(πs/(2 tr)) = (1 - cos(ks))/2 on a ramp, s measured from its foot
+                w = np.where(mask, 0.5 * (1 - np.cos(k * s)), w)
+                dw = np.where(mask, sign * 0.5 * k * np.sin(k * s), dw)
+                ddw = np.where(mask, 0.5 * k * k * np.cos(k * s), ddw)
+        outside = (t < 0) | (t > self.end_time)
+        return (np.where(outside, 0.0, w), np.where(outside, 0.0, dw), np.where(outside, 0.0, ddw))
+
+    def displacement(self, t: ArrayLike) -> ArrayLike:
+        t = np.asarray(t, float)
+        w, _, _ = self._window(t)
+        return self.amplitude * np.sin(self.omega * t) * w
+
+    def velocity(self, t: ArrayLike) -> ArrayLike:
+        t = np.asarray(t, float)
+        w, dw, _ = self._window(t)
+        om = self.omega
+        return self.amplitude * (om * np.cos(om * t) * w + np.sin(om * t) * dw)
+
+    def acceleration(self, t: ArrayLike) -> ArrayLike:
+        t = np.asarray(t, float)
+        w, dw, ddw = self._window(t)
+        om = self.omega
+        s, c = np.sin(om * t), np.cos(om * t)
+        return self.amplitude * (-om * om * s * w + 2 * om * c * dw + s * ddw)
+
+    def to_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {"type": self.kind, "frequency": self.frequency,
+                             "amplitude": self.amplitude, "ramp_cycles": self.ramp_cycles}
+        if self.duration is not None:
+            d["duration"] = self.duration
+        return d
+
+
+@dataclass(frozen=True)
+class Record(Excitation):
+    """A recorded accelerogram, linearly interpolated and integrated exactly.
+
+    The acceleration between samples is linear; velocity and displacement are its
+    exact integrals from rest. A constant acceleration offset (a linear baseline
+    correction of the velocity) is removed so that the base ends at rest at the
+    last sample; after it the base stands still.
+
+    Parameters
+    ----------
+    times : array_like
+        Sample times in s, strictly increasing, starting at 0 or later
+        (a sample ``(0, 0)`` is prepended when the first time is > 0).
+    accelerations : array_like
+        Accelerations in m/s² (before ``scale``).
+    scale : float
+        Factor applied to the accelerations.
+    source : str
+        File the record came from (kept for scenario files); empty if inline.
+    units : str
+        Units of the source file (``"g"`` or ``"m/s2"``), kept for round trips.
+    """
+
+    times: np.ndarray
+    accelerations: np.ndarray
+    scale: float = 1.0
+    source: str = ""
+    units: str = "m/s2"
+    kind: ClassVar[str] = "record"
+    _tab: tuple[np.ndarray, ...] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.times, float).reshape(-1)
+        a = np.asarray(self.accelerations, float).reshape(-1)
+        if t.size != a.size or t.size < 2:
+            raise ScenarioError(
+                f"record needs matching time and acceleration arrays of at least 2 samples, "
+                f"got {t.size} and {a.size}"
+            )
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(a))):
+            raise ScenarioError("record contains NaN or infinite values")
+        if np.any(np.diff(t) <= 0) or t[0] < 0:
+            raise ScenarioError("record times must be >= 0 and strictly increasing")
+        if not math.isfinite(float(self.scale)):
+            raise ScenarioError(f"record scale must be finite, got {self.scale!r}")
+        if t[0] > 0:
+            t = np.concatenate([[0.0], t])
+            a = np.concatenate([[0.0], a])
+        object.__setattr__(self, "times", t)
+        object.__setattr__(self, "accelerations", a)
+        a = a * float(self.scale)
+        dt = np.diff(t)
+        # exact velocity of the piecewise-linear acceleration, then the constant
+        # offset c that brings the velocity back to zero at the last sample
+        v_raw = np.concatenate([[0.0], np.cumsum(0.5 * (a[:-1] + a[1:]) * dt)])
+        c = v_raw[-1] / t[-1]
+        a = a - c
+        v = np.concatenate([[0.0], np.cumsum(0.5 * (a[:-1] + a[1:]) * dt)])
+        u = np.concatenate([[0.0], np.cumsum(v[:-1] * dt + dt * dt * (2 * a[:-1] + a[1:]) / 6)])
+        object.__setattr__(self, "_tab", (t, a, v, u))
+
+    @property
+    def end_time(self) -> float:
+        return float(self.times[-1])
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        return tuple(float(x) for x in self.times[1:])
+
+    def _locate(self, t: ArrayLike) -> tuple[np.ndarray, ...]:
+        tt, a, v, u = self._tab
+        t = np.asarray(t, float)
+        tc = np.clip(t, 0.0, tt[-1])
+        k = np.clip(np.searchsorted(tt, tc, side="right") - 1, 0, tt.size - 2)
+        tau = tc - tt[k]
+        slope = (a[k + 1] - a[k]) / (tt[k + 1] - tt[k])
+        return t, k, tau, slope
+
+    def acceleration(self, t: ArrayLike) -> ArrayLike:
+        t, k, tau, slope = self._locate(t)
+        a = self._tab[1]
+        return np.where((t < 0) | (t > self.end_time), 0.0, a[k] + slope * tau)
+
+    def velocity(self, t: ArrayLike) -> ArrayLike:
+        t, k, tau, slope = self._locate(t)
+        _, a, v, _ = self._tab
+        return np.where(t < 0, 0.0, v[k] + a[k] * tau + 0.5 * slope * tau**2)
+
+    def displacement(self, t: ArrayLike) -> ArrayLike:
+        t, k, tau, slope = self._locate(t)
+        _, a, v, u = self._tab
+        return np.where(
+            t < 0, 0.0, u[k] + v[k] * tau + 0.5 * a[k] * tau**2 + slope * tau**3 / 6
+        )
+
+    def peak_acceleration(self, t_end: float = math.inf) -> float:
+        tt, a, _, _ = self._tab
+        return float(np.max(np.abs(a[tt <= t_end]))) if np.any(tt <= t_end) else 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        if self.source:
+            return {"type": self.kind, "file": self.source, "units": self.units,
+                    "scale": self.scale}
+        return {"type": self.kind, "times": self.times.tolist(),
+                "accelerations": self.accelerations.tolist(), "scale": self.scale}
+
+    @classmethod
+    def from_file(
+        cls, path: str | Path, *, units: str | None = None, scale: float = 1.0,
+        source: str | None = None,
+    ) -> Record:
+        """Read a PEER NGA ``.AT2`` file or a two-column CSV ``t,acc``.
+
+        Parameters
+        ----------
+        path : str or Path
+            The file. ``.at2`` (any case) selects the PEER reader.
+        units : {"g", "m/s2"}, optional
+            Units of the file's accelerations; default ``"g"`` for AT2 and
+            ``"m/s2"`` for CSV.
+        scale : float
+            Extra factor on the accelerations.
+        source : str, optional
+            Path to store in scenario files (default: ``path`` as given).
+        """
+        path = Path(path)
+        is_at2 = path.suffix.lower() == ".at2"
+        units = units or ("g" if is_at2 else "m/s2")
+        if units not in ("g", "m/s2"):
+            raise ScenarioError(f"record units must be 'g' or 'm/s2', got {units!r}")
+        try:
+            text = path.read_text()
+        except OSError as exc:
+            raise ScenarioError(f"cannot read record file {str(path)!r}: {exc.strerror}") from None
+        t, a = _parse_at2(text, path) if is_at2 else _parse_csv(text, path)
+        if units == "g":
+            a = a * STANDARD_GRAVITY
+        return cls(t, a, scale=scale, source=str(source if source is not None else path),
+                   units=units)
+
+
+def _parse_csv(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    rows = []
+    for ln, line in enumerate(text.splitlines(), 1):
+        s = line.strip()
+        if not s or s.startswith("#"):
+            continue
+        parts = [p for p in s.replace(";", ",").replace("\t", ",").split(",") if p.strip()]
+        try:
+            vals = [float(p) for p in parts]
+        except ValueError:
+            if not rows:  # a header line
+                continue
+            raise ScenarioError(f"{path}: line {ln} is not two numbers: {s!r}") from None
+        if len(vals) != 2:
+            raise ScenarioError(f"{path}: line {ln} must have 2 columns (t, acc), has {len(vals)}")
+        rows.append(vals)
+    if len(rows) < 2:
+        raise ScenarioError(f"{path}: no record data found (expected CSV rows 't,acc')")
+    arr = np.asarray(rows)
+    return arr[:, 0], arr[:, 1]
+
+
+def _parse_at2(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    import re
+
+    lines = text.splitlines()
+    if len(lines) < 5:
+        raise ScenarioError(f"{path}: too short for a PEER AT2 file (4 header lines + data)")
+    header = lines[3].upper()
+    m_n = re.search(r"NPTS\s*=?\s*(\d+)", header)
+    m_dt = re.search(r"DT\s*=?\s*([0-9.Ee+-]+)", header)
+    if not (m_n and m_dt):
+        raise ScenarioError(f"{path}: line 4 must give NPTS and DT, got {lines[3].strip()!r}")
+    n, dt = int(m_n.group(1)), float(m_dt.group(1))
+    try:
+        vals = np.array([float(x) for ln in lines[4:] for x in ln.split()])
+    except ValueError as exc:
+        raise ScenarioError(f"{path}: non-numeric data ({exc})") from None
+    if vals.size < n:
+        raise ScenarioError(f"{path}: header says NPTS={n} but {vals.size} values found")
+    if dt <= 0:
+        raise ScenarioError(f"{path}: DT must be > 0, got {dt}")
+    return dt * np.arange(n), vals[:n]

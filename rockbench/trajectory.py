@@ -1,0 +1,220 @@
+"""The :class:`Trajectory` result type returned by engines and analytic references.
+
+A trajectory holds sampled time histories per block (bottom to top) and the
+outcome of the run. It is deliberately neutral: the analytic package and the
+engine plugins both build it, and the report only ever reads it.
+
+Files: ``save("run.npz")`` writes the arrays plus a JSON sidecar ``run.json``
+with the metadata; ``save("run.csv")`` writes one column per quantity
+(``t, theta_1, x_1, z_1, wobble_1, theta_2, ...``) plus the same sidecar.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from enum import Enum
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Status", "Trajectory", "QUANTITIES"]
+
+#: Per-block quantities stored in a trajectory, in column order.
+QUANTITIES = ("theta", "x", "z", "wobble")
+
+
+class Status(str, Enum):
+    """Outcome of a run. Stability is a result: every status is reportable."""
+
+    OK = "ok"
+    OVERTURNED = "overturned"
+    UNSTABLE = "unstable"  # NaN, explosion or energy gain
+    CRASHED = "crashed"  # exception or dead process
+    TIMEOUT = "timeout"
+    UNSUPPORTED = "unsupported"
+
+    def __str__(self) -> str:  # print "ok", not "Status.OK"
+        return self.value
+
+    @property
+    def completed(self) -> bool:
+        """True if the physics ran to a physical outcome (ok or overturned)."""
+        return self in (Status.OK, Status.OVERTURNED)
+
+
+def _as_2d(a: Any, n: int, name: str) -> np.ndarray:
+    arr = np.asarray(a, dtype=float)
+    if arr.ndim == 1:
+        arr = arr[:, None]
+    if arr.ndim != 2 or arr.shape[0] != n:
+        raise ValueError(f"{name} must have shape (len(t), n_blocks), got {arr.shape}")
+    return arr
+
+
+@dataclass
+class Trajectory:
+    """Sampled response of a block or stack.
+
+    Parameters
+    ----------
+    t : ndarray, shape (n,)
+        Sample times in s.
+    theta : ndarray, shape (n, n_blocks)
+        Absolute rocking angle of each block about +y (rad), bottom block first.
+        Positive when the block's top moves toward +x.
+    x, z : ndarray, shape (n, n_blocks), optional
+        Centroid position in the ground frame (m); NaN where unknown.
+    wobble : ndarray, shape (n, n_blocks), optional
+        Out-of-plane rotation (rad): angle between the block's y axis and the
+        world y axis; 0 for planar methods.
+    status : Status
+        Outcome of the run.
+    message : str
+        Reason for a non-ok status, or a note.
+    wall_time : float
+        Wall-clock time of the simulation in s.
+    engine, engine_version : str
+        Who produced it.
+    settings : dict
+        The engine settings used (plain JSON-able values).
+    scenario : str
+        Name of the scenario.
+    impacts : ndarray, optional
+        Impact times (s) where the method knows them (analytic references).
+    extra : dict
+        Free-form JSON-able metadata (e.g. motion patterns of the analytic model).
+    """
+
+    t: np.ndarray
+    theta: np.ndarray
+    x: np.ndarray | None = None
+    z: np.ndarray | None = None
+    wobble: np.ndarray | None = None
+    status: Status = Status.OK
+    message: str = ""
+    wall_time: float = 0.0
+    engine: str = ""
+    engine_version: str = ""
+    settings: dict[str, Any] = field(default_factory=dict)
+    scenario: str = ""
+    impacts: np.ndarray | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.t = np.asarray(self.t, dtype=float).reshape(-1)
+        n = self.t.size
+        self.theta = _as_2d(self.theta, n, "theta")
+        nb = self.theta.shape[1]
+        for name in ("x", "z", "wobble"):
+            val = getattr(self, name)
+            if val is None:
+                val = np.zeros((n, nb)) if name == "wobble" else np.full((n, nb), np.nan)
+            setattr(self, name, _as_2d(val, n, name))
+        self.status = Status(self.status)
+        self.impacts = None if self.impacts is None else np.asarray(self.impacts, float)
+
+    @property
+    def n_blocks(self) -> int:
+        """Number of blocks."""
+        return self.theta.shape[1]
+
+    @classmethod
+    def failed(
+        cls, status: Status | str, message: str, *, n_blocks: int = 1, **meta: Any
+    ) -> Trajectory:
+        """An empty trajectory that records why a run produced no samples."""
+        return cls(
+            t=np.zeros(0), theta=np.zeros((0, n_blocks)), status=Status(status),
+            message=message, **meta,
+        )
+
+    def metadata(self) -> dict[str, Any]:
+        """JSON-able metadata (everything except the arrays)."""
+        return {
+            "scenario": self.scenario,
+            "engine": self.engine,
+            "engine_version": self.engine_version,
+            "settings": self.settings,
+            "status": self.status.value,
+            "message": self.message,
+            "wall_time": self.wall_time,
+            "n_blocks": self.n_blocks,
+            "impacts": None if self.impacts is None else self.impacts.tolist(),
+            "extra": self.extra,
+        }
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """Flat columns ``t, theta_1, x_1, z_1, wobble_1, theta_2, ...`` (blocks 1-based)."""
+        cols = {"t": self.t}
+        for i in range(self.n_blocks):
+            for q in QUANTITIES:
+                cols[f"{q}_{i + 1}"] = getattr(self, q)[:, i]
+        return cols
+
+    def save(self, path: str | Path, *, scenario: dict[str, Any] | None = None) -> Path:
+        """Write the arrays (``.npz`` or ``.csv``) and a JSON sidecar (``.json``).
+
+        Parameters
+        ----------
+        path : str or Path
+            Target file; its suffix selects the format.
+        scenario : dict, optional
+            The scenario description to store in the sidecar.
+
+        Returns
+        -------
+        Path
+            The sidecar path.
+        """
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        cols = self.columns()
+        if path.suffix == ".npz":
+            np.savez_compressed(path, **cols)
+        elif path.suffix == ".csv":
+            data = np.column_stack(list(cols.values())) if self.t.size else np.zeros((0, len(cols)))
+            np.savetxt(path, data, delimiter=",", header=",".join(cols), comments="", fmt="%.10g")
+        else:
+            raise ValueError(f"unsupported trajectory format {path.suffix!r}: use .npz or .csv")
+        meta = self.metadata()
+        if scenario is not None:
+            meta["scenario_definition"] = scenario
+        side = path.with_suffix(".json")
+        side.write_text(json.dumps(meta, indent=2, default=_json_default))
+        return side
+
+    @classmethod
+    def load(cls, path: str | Path) -> Trajectory:
+        """Read a trajectory written by :meth:`save`."""
+        path = Path(path)
+        meta = json.loads(path.with_suffix(".json").read_text())
+        if path.suffix == ".npz":
+            with np.load(path) as f:
+                cols = {k: f[k] for k in f.files}
+        else:
+            data = np.genfromtxt(path, delimiter=",", names=True, ndmin=1)
+            names = data.dtype.names or ()
+            cols = {k: np.atleast_1d(data[k]).astype(float) for k in names}
+        nb = int(meta["n_blocks"])
+        arrays = {
+            q: np.column_stack([cols[f"{q}_{i + 1}"] for i in range(nb)]).reshape(-1, nb)
+            for q in QUANTITIES
+        }
+        return cls(
+            t=cols["t"], **arrays, status=Status(meta["status"]), message=meta["message"],
+            wall_time=meta["wall_time"], engine=meta["engine"],
+            engine_version=meta["engine_version"], settings=meta["settings"],
+            scenario=meta["scenario"], impacts=meta.get("impacts"), extra=meta.get("extra", {}),
+        )
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, Enum):
+        return obj.value
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
