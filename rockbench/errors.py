@@ -28,11 +28,12 @@ class ScenarioError(RockbenchError, ValueError):
     """A scenario, block, excitation or scenario file is invalid."""
 
 
-def _did_you_mean(name: str, choices: Iterable[str]) -> str:
+def _did_you_mean(name: str, choices: Iterable[str], listing: str = "") -> str:
     choices = sorted(choices)
     close = difflib.get_close_matches(name, choices, n=1)
-    hint = f"; did you mean {close[0]!r}?" if close else ""
-    return f"{hint} Valid names: {', '.join(choices)}"
+    hint = f"; did you mean {close[0]!r}?" if close else "."
+    names = listing or f"valid names: {', '.join(choices)}"
+    return f"{hint} {names[0].upper()}{names[1:]}"
 
 
 class UnknownEngine(RockbenchError, ValueError):
@@ -47,7 +48,8 @@ class UnknownScenario(ScenarioError):
     """No catalog scenario or suite has this name (and it is not a file)."""
 
     def __init__(self, name: str, choices: Iterable[str], kind: str = "scenario") -> None:
-        super().__init__(f"unknown {kind} {name!r}{_did_you_mean(name, choices)}")
+        listing = f"run `rockbench scenarios` for the list of {kind}s" if kind == "scenario" else ""
+        super().__init__(f"unknown {kind} {name!r}{_did_you_mean(name, choices, listing)}")
         self.name = name
 
 
