@@ -1,0 +1,5 @@
+"""Shared fixtures: matplotlib without a display."""
+
+import matplotlib
+
+matplotlib.use("Agg")

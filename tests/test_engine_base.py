@@ -1,0 +1,175 @@
+"""The Engine template method: sampling, driving, status detection, settings, registry."""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from rockbench.engines import (
+    Capabilities,
+    Engine,
+    EngineSettings,
+    SettingsError,
+    angles_from_quaternions,
+    engine_class,
+    get_engine,
+    list_engines,
+    parse_set_options,
+    register,
+    resolve_engine_names,
+    unregister,
+)
+from rockbench.errors import EngineUnavailable, UnknownEngine
+from rockbench.scenarios import Block, Scenario, SinePulse, Stack
+from rockbench.trajectory import Status
+
+
+@dataclass(frozen=True)
+class CarrySettings(EngineSettings):
+    """Knobs of the test engine."""
+
+    timestep: float = 1e-3
+    spin: float = 0.0  # prescribed rocking rate (rad/s), to provoke overturning
+    poison_at: float = math.inf  # time from which poses are NaN
+    fly_at: float = math.inf  # time from which block 1 is thrown far away
+    rise_at: float = math.inf  # time from which block 1 is lifted (energy gain)
+
+
+class CarryEngine(Engine):
+    """A stand-in engine: blocks ride rigidly on the base, optionally spinning."""
+
+    name = "carry"
+    capabilities = Capabilities(dimensions=2, max_blocks=2, chamfer=False)
+    Settings = CarrySettings
+    presets = {"accurate": {}, "fast": {"timestep": 0.005}}
+
+    @classmethod
+    def version(cls) -> str:
+        return "1.0"
+
+    def _build(self, scenario, settings):
+        self.sc, self.s = scenario, settings
+        self.c0, self.th0 = scenario.initial_poses()
+        self.t = 0.0
+        self.u = 0.0
+        self.drives: list[float] = []
+        self.fixed = False
+        self.out = np.zeros((scenario.n_blocks, 7))
+        return settings.timestep
+
+    def _drive_base(self, t, dt):
+        self.drives.append(t)
+        self.u = float(self.sc.excitation.displacement(t + dt))
+
+    def _fix_base(self):
+        self.fixed = True
+        return True
+
+    def _advance(self, n):
+        self.t += n * self.s.timestep
+
+    def _read_poses(self):
+        th = self.th0 + self.s.spin * self.t
+        self.out[:, 0] = self.c0[:, 0] + self.u
+        self.out[:, 2] = self.c0[:, 1]
+        self.out[:, 3] = math.cos(th / 2)
+        self.out[:, 5] = math.sin(th / 2)
+        if self.t >= self.s.poison_at:
+            self.out[0, 0] = np.nan
+        if self.t >= self.s.fly_at:
+            self.out[0, 0] = 1e3
+        if self.t >= self.s.rise_at:
+            self.out[0, 2] += 1.0
+        return self.out
+
+
+B = Block(0.5, 0.2, 1.0, mass=1.0)
+
+
+@pytest.fixture
+def carry():
+    register("carry", CarryEngine)
+    yield get_engine("carry")
+    unregister("carry")
+
+
+def test_quaternion_angles_sign_convention():
+    th = 0.3
+    q = np.array([math.cos(th / 2), 0.0, math.sin(th / 2), 0.0])  # rotation about +y
+    theta, wobble = angles_from_quaternions(q)
+    assert theta == pytest.approx(th) and wobble == pytest.approx(0.0)
+    # about +y by θ moves the body's z axis toward +x: R02 = sin θ > 0
+    q_x = np.array([math.cos(0.05), math.sin(0.05), 0.0, 0.0])  # about x: wobble only
+    theta, wobble = angles_from_quaternions(q_x)
+    assert theta == pytest.approx(0.0, abs=1e-12) and wobble == pytest.approx(0.1)
+
+
+def test_samples_at_output_rate_and_drives_each_step(carry):
+    sc = Scenario("p", B, excitation=SinePulse(5.0, 0.002), duration=0.5, output_rate=100.0)
+    traj = carry.simulate(sc)
+    assert traj.status is Status.OK
+    np.testing.assert_allclose(traj.t, np.arange(51) / 100.0)
+    # the base is driven before every step while it moves, then fixed and batched
+    assert carry.drives[:3] == pytest.approx([0.0, 0.001, 0.002])
+    assert carry.fixed and max(carry.drives) == pytest.approx(0.2, abs=0.011)
+    assert traj.x[-1, 0] == pytest.approx(sc.excitation.displacement(1.0), rel=1e-9)
+    assert traj.engine == "carry" and traj.engine_version == "1.0"
+    assert traj.settings["steps_per_sample"] == 10
+    assert traj.wall_time > 0
+
+
+def test_overturning_nan_explosion_and_energy_gain_become_statuses(carry):
+    sc = Scenario("f", B, initial_tilt=0.5, duration=2.0, output_rate=100.0)
+    over = carry.simulate(sc, {"spin": 2.0})
+    assert over.status is Status.OVERTURNED and "block 1" in over.message
+    assert abs(over.theta[-1, 0]) >= math.pi / 2 and over.t[-1] < 1.0
+    assert carry.simulate(sc, {"poison_at": 0.5}).status is Status.UNSTABLE
+    fly = carry.simulate(sc, {"fly_at": 0.5})
+    assert fly.status is Status.UNSTABLE and "explosion" in fly.message
+    rise = carry.simulate(sc, {"rise_at": 0.5})
+    assert rise.status is Status.UNSTABLE and "energy" in rise.message
+    assert rise.t[-1] == pytest.approx(0.5, abs=0.011)
+
+
+def test_unsupported_is_a_status(carry):
+    three = Scenario("s", Stack((B, B, B)), duration=0.1)
+    traj = carry.simulate(three)
+    assert traj.status is Status.UNSUPPORTED and "at most 2" in traj.message
+    chamfered = Scenario("c", Block(0.5, 0.2, 1.0, mass=1.0, chamfer=0.01), duration=0.1)
+    assert carry.simulate(chamfered).status is Status.UNSUPPORTED
+
+
+def test_settings_presets_and_overrides(carry):
+    assert carry.settings("fast").timestep == 0.005
+    s = carry.settings(None, timestep="0.002", spin="1")
+    assert s.timestep == 0.002 and s.spin == 1.0
+    assert s.digest() != carry.settings().digest()
+    with pytest.raises(SettingsError, match="no knob 'dt'"):
+        carry.settings(None, dt=1)
+    with pytest.raises(SettingsError, match="no preset"):
+        carry.settings("slow")
+    with pytest.raises(SettingsError, match="float"):
+        carry.settings(None, timestep="abc")
+    assert parse_set_options(["carry.timestep=1e-4", "mujoco.preset=fast"]) == {
+        "carry": {"timestep": "1e-4"}, "mujoco": {"preset": "fast"}}
+    with pytest.raises(SettingsError):
+        parse_set_options(["timestep=3"])
+
+
+def test_registry_names_and_errors(carry):
+    assert "carry" in [i.name for i in list_engines()]
+    assert engine_class("reference").name == "analytic"
+    with pytest.raises(UnknownEngine, match="did you mean 'carry'"):
+        engine_class("cary")
+    assert resolve_engine_names("carry,analytic") == ["carry", "analytic"]
+    assert "carry" in resolve_engine_names("all")
+    register("broken", "rockbench.engines.no_such_module:Nothing")
+    try:
+        with pytest.raises(EngineUnavailable, match="broken"):
+            engine_class("broken")
+        info = {i.name: i for i in list_engines()}["broken"]
+        assert not info.available and "pip install" in info.reason
+        assert "broken" not in resolve_engine_names("all")
+    finally:
+        unregister("broken")
