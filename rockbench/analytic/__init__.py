@@ -6,11 +6,30 @@ imports :mod:`rockbench.engines`: a reference must not depend on what it checks.
 
 from __future__ import annotations
 
+from rockbench.analytic.closed_forms import (
+    amplitude_after_impacts,
+    free_impact_times,
+    free_period,
+    impact_velocity,
+    quarter_period,
+)
+from rockbench.analytic.housner import SingleBlockSolution, single_block_reference, solve_single
+from rockbench.analytic.twoblock import (
+    BlockParams,
+    TwoBlockSolution,
+    solve_two_blocks,
+    two_block_reference,
+)
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Trajectory
 
-__all__ = ["reference", "has_reference"]
+__all__ = [
+    "reference", "has_reference", "solve_single", "single_block_reference",
+    "SingleBlockSolution", "solve_two_blocks", "two_block_reference", "BlockParams",
+    "TwoBlockSolution", "free_period", "quarter_period", "amplitude_after_impacts",
+    "impact_velocity", "free_impact_times",
+]
 
 
 def has_reference(scenario: Scenario) -> bool:
@@ -31,9 +50,5 @@ def reference(scenario: Scenario) -> Trajectory:
             "analytic references exist for one block or two centred stacked blocks only"
         )
     if scenario.n_blocks == 1:
-        from rockbench.analytic.housner import single_block_reference
-
         return single_block_reference(scenario)
-    from rockbench.analytic.twoblock import two_block_reference
-
     return two_block_reference(scenario)
