@@ -1,0 +1,315 @@
+"""MuJoCo engine plugin: rigid blocks as free bodies on a box base driven along x.
+
+Scene (built as an MJCF string from the Scenario)
+-------------------------------------------------
+* Each block is a body with a free joint, its frame at the centroid, with the
+  explicit mass and principal inertia of :attr:`Block.inertia`. Its collision
+  shape is a ``box`` geom, or, when chamfered, a ``mesh`` geom made of the
+  :meth:`Block.profile` polygon extruded along y (MuJoCo collides with the
+  convex hull; multi-point convex collision ("multiccd") stays enabled so that a
+  flat face gives several contact points).
+* The ground is a box whose top face is the plane z = 0. In free rocking it is
+  a static world geom. Under base excitation it is a heavy body on a slide joint
+  along x, driven kinematically: before every step its position and velocity are
+  overwritten with the excitation's displacement/velocity and a force gives it
+  exactly the acceleration that brings it to the next step's velocity. (A mocap
+  body would not drag the blocks through friction: MuJoCo treats it as static
+  in the contact Jacobian.) After the excitation the slide joint gets a huge
+  (implicitly integrated) damping, which holds the base still so that steps
+  are batched in C.
+* Contacts: condim 3, Coulomb friction from the scenario, elliptic cone by
+  default, ``solref`` time constant = ``timeconst_factor`` × time step and damping
+  ratio ``dampratio`` (critical damping gives a perfectly plastic impact),
+  ``solimp`` tight. MuJoCo has no restitution coefficient: a scenario
+  restitution e > 0 is mapped onto the damping ratio of the contact spring,
+  ζ = −ln e / sqrt(π² + ln² e) (the linear spring–damper whose bounce is e);
+  this is approximate because the contact also has an impedance (solimp).
+* No damping, no sleeping.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+
+from rockbench.engines.base import Capabilities, Engine
+from rockbench.engines.settings import EngineSettings
+from rockbench.errors import UnsupportedScenario
+from rockbench.scenarios import Scenario
+
+__all__ = ["MujocoEngine", "MujocoSettings"]
+
+#: Base mass per kg of blocks: the contact reaction barely moves a driven base.
+_BASE_MASS_RATIO = 1.0e6
+#: Excitation samples precomputed per chunk (bounded memory for long records).
+_CHUNK = 20000
+
+
+@dataclass(frozen=True)
+class MujocoSettings(EngineSettings):
+    """Knobs of the MuJoCo engine (defaults = the ``accurate`` preset).
+
+    Parameters
+    ----------
+    timestep : float
+        Physics time step in s (``opt.timestep``), the main accuracy lever.
+    timeconst_factor : float
+        Contact ``solref`` time constant as a multiple of the time step. MuJoCo
+        clamps it to ≥ 2 steps (``refsafe``); 2–5 works, larger makes contacts
+        softer (more penetration, impacts smeared and early).
+    dampratio : float
+        Contact ``solref`` damping ratio used when the scenario restitution is 0
+        (1 = critical: a plastic impact, as Housner assumes).
+    solimp_dmin : float
+        ``solimp`` d0: constraint impedance at zero penetration (0–1, 1 = hard).
+    solimp_dmax : float
+        ``solimp`` d_width: impedance at ``solimp_width`` penetration.
+    solimp_width : float
+        ``solimp`` width in m over which the impedance rises from dmin to dmax.
+    integrator : {"Euler", "implicitfast", "implicit"}
+        Time integrator. Euler is semi-implicit (symplectic) and the cheapest.
+        RK4 is not offered: it integrates the base's holding damping explicitly.
+    cone : {"elliptic", "pyramidal"}
+        Friction cone. Elliptic is exact Coulomb; pyramidal is a linearisation.
+    solver : {"Newton", "CG", "PGS"}
+        Constraint solver.
+    iterations : int
+        Maximum constraint-solver iterations per step.
+    tolerance : float
+        Solver tolerance (relative cost improvement at which it stops).
+    ls_iterations : int
+        Maximum line-search iterations of the Newton/CG solvers.
+    noslip_iterations : int
+        Extra no-slip iterations after the main solver (0 = off); they remove the
+        creep that soft friction allows.
+    impratio : float
+        Ratio of frictional to normal constraint impedance (elliptic cones only);
+        > 1 makes friction harder.
+    multiccd : bool
+        Several contact points between convex meshes (chamfered blocks) instead
+        of one. Boxes use MuJoCo's box–box routine either way.
+
+    Notes
+    -----
+    Calibrated with ``benchmarks/calibrate_mujoco.py`` (free rocking B0–B3, six
+    sine pulses): ``accurate`` (dt 0.1 ms, τ = 2 dt) stays below 2e-3 λ and 0.11 %
+    on pulse peaks; ``fast`` (dt 1 ms, τ = 4 dt; τ = 2 dt loses too much energy per
+    impact at this step) stays below 0.032 λ and 1.1 %.
+    """
+
+    timestep: float = 1.0e-4
+    timeconst_factor: float = 2.0
+    dampratio: float = 1.0
+    solimp_dmin: float = 0.99
+    solimp_dmax: float = 0.999
+    solimp_width: float = 0.001
+    integrator: Literal["Euler", "implicitfast", "implicit"] = "Euler"
+    cone: Literal["elliptic", "pyramidal"] = "elliptic"
+    solver: Literal["Newton", "CG", "PGS"] = "Newton"
+    iterations: int = 100
+    tolerance: float = 1.0e-10
+    ls_iterations: int = 50
+    noslip_iterations: int = 0
+    impratio: float = 10.0
+    multiccd: bool = True
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.timestep) and self.timestep > 0):
+            raise ValueError(f"timestep must be finite and > 0, got {self.timestep!r}")
+        if not self.timeconst_factor > 0:
+            raise ValueError(f"timeconst_factor must be > 0, got {self.timeconst_factor!r}")
+        if not self.dampratio > 0:
+            raise ValueError(f"dampratio must be > 0, got {self.dampratio!r}")
+        if not 0 < self.solimp_dmin <= self.solimp_dmax < 1:
+            raise ValueError("solimp must satisfy 0 < solimp_dmin <= solimp_dmax < 1")
+        if not self.solimp_width > 0:
+            raise ValueError(f"solimp_width must be > 0, got {self.solimp_width!r}")
+        for name in ("iterations", "ls_iterations"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)!r}")
+        if self.noslip_iterations < 0:
+            raise ValueError(f"noslip_iterations must be >= 0, got {self.noslip_iterations!r}")
+        if not (self.tolerance >= 0 and self.impratio >= 1):
+            raise ValueError("tolerance must be >= 0 and impratio >= 1")
+
+
+def restitution_dampratio(e: float) -> float:
+    """Damping ratio of the linear spring–damper whose coefficient of restitution is ``e``."""
+    if e <= 0:
+        return 1.0
+    le = math.log(e)
+    return -le / math.sqrt(math.pi**2 + le * le)
+
+
+def _fmt(values: Any) -> str:
+    """Numbers for MJCF attributes (shortest text that round-trips)."""
+    return " ".join(repr(float(v)) for v in np.ravel(values))
+
+
+class MujocoEngine(Engine):
+    """MuJoCo (DeepMind) rigid-body engine with soft, convex contacts."""
+
+    name: ClassVar[str] = "mujoco"
+    capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
+                                                        chamfer=True)
+    Settings: ClassVar[type[EngineSettings]] = MujocoSettings
+    presets: ClassVar[dict[str, dict[str, Any]]] = {
+        "accurate": {},
+        # dt ≤ 1/output_rate: the base loop takes whole steps per output sample
+        "fast": {"timestep": 1.0e-3, "timeconst_factor": 4.0, "iterations": 50,
+                 "tolerance": 1.0e-8},
+    }
+    install_hint: ClassVar[str] = "pip install mujoco"
+
+    @classmethod
+    def version(cls) -> str:
+        import mujoco
+
+        return str(mujoco.__version__)
+
+    # ------------------------------------------------------------------ build
+    def _check_supported(self, scenario: Scenario) -> None:
+        if scenario.contact.restitution >= 0.99:
+            raise UnsupportedScenario(
+                "mujoco models restitution through the contact damping ratio and cannot "
+                f"represent near-elastic impacts (restitution {scenario.contact.restitution})"
+            )
+
+    def mjcf(self, scenario: Scenario, settings: MujocoSettings) -> str:
+        """The MJCF model of ``scenario`` (public for inspection and tests)."""
+        s = settings
+        blocks = scenario.blocks
+        e = scenario.contact.restitution
+        zeta = restitution_dampratio(e) if e > 0 else s.dampratio
+        tau = s.timeconst_factor * s.timestep
+        mu = scenario.contact.friction
+        geom_common = (
+            f'condim="3" friction="{_fmt(mu)} 0 0" solref="{_fmt(tau)} {_fmt(zeta)}" '
+            f'solimp="{_fmt(s.solimp_dmin)} {_fmt(s.solimp_dmax)} {_fmt(s.solimp_width)} 0.5 2" '
+            'margin="0" gap="0"'
+        )
+        centroids, th = scenario.initial_poses()
+        quat = (math.cos(0.5 * th), 0.0, math.sin(0.5 * th), 0.0)
+        mass_total = sum(b.m for b in blocks)
+        # a base large enough for the stack, its tilt and the base travel
+        ext = scenario.stack.total_height + max(b.width for b in blocks)
+        hx = 2.0 * ext + 2.0 * self._base_travel(scenario) + 1.0
+        hy = 2.0 * max(b.depth for b in blocks) + 0.5
+        hz = 0.25 * ext + 0.1
+        flags = "" if s.multiccd else ' multiccd="disable"'
+        assets, bodies = [], []
+        for i, (blk, c) in enumerate(zip(blocks, centroids, strict=True)):
+            if blk.chamfer > 0:
+                prof = blk.profile()
+                hd = 0.5 * blk.depth
+                verts = [(x, y, z) for y in (-hd, hd) for x, z in prof]
+                assets.append(f'<mesh name="prism{i}" vertex="{_fmt(verts)}"/>')
+                shape = f'type="mesh" mesh="prism{i}"'
+            else:
+                shape = f'type="box" size="{_fmt((blk.b, 0.5 * blk.depth, blk.h))}"'
+            bodies.append(
+                f'<body name="block{i}" pos="{_fmt((c[0], 0.0, c[1]))}" quat="{_fmt(quat)}">'
+                f'<freejoint name="free{i}"/>'
+                f'<inertial pos="0 0 0" mass="{_fmt(blk.m)}" diaginertia="{_fmt(blk.inertia)}"/>'
+                f'<geom name="geom{i}" {shape} {geom_common}/></body>'
+            )
+        base_geom = (f'<geom name="base" type="box" size="{_fmt((hx, hy, hz))}" '
+                     f'pos="0 0 {_fmt(-hz)}" {geom_common}/>')
+        if scenario.excitation.is_free:
+            base = base_geom
+        else:
+            mb = _BASE_MASS_RATIO * mass_total
+            ib = mb * (hx * hx + hz * hz) / 3.0  # irrelevant (no rotation), but positive
+            base = (f'<body name="base" pos="0 0 0"><joint name="slide" type="slide" '
+                    f'axis="1 0 0" damping="0" armature="0"/>'
+                    f'<inertial pos="0 0 {_fmt(-hz)}" mass="{_fmt(mb)}" '
+                    f'diaginertia="{_fmt(ib)} {_fmt(ib)} {_fmt(ib)}"/>{base_geom}</body>')
+        return (
+            '<mujoco model="rockbench">'
+            '<compiler angle="radian" inertiafromgeom="false" boundmass="0" boundinertia="0"/>'
+            f'<option timestep="{_fmt(s.timestep)}" gravity="0 0 {_fmt(-scenario.g)}" '
+            f'integrator="{s.integrator}" cone="{s.cone}" solver="{s.solver}" '
+            f'iterations="{s.iterations}" tolerance="{_fmt(s.tolerance)}" '
+            f'ls_iterations="{s.ls_iterations}" noslip_iterations="{s.noslip_iterations}" '
+            f'impratio="{_fmt(s.impratio)}"><flag{flags}/></option>'
+            f'<asset>{"".join(assets)}</asset>'
+            f'<worldbody>{"".join(bodies)}{base}</worldbody></mujoco>'
+        )
+
+    @staticmethod
+    def _base_travel(scenario: Scenario) -> float:
+        exc = scenario.excitation
+        if exc.is_free:
+            return 0.0
+        t_end = min(scenario.duration, exc.end_time)
+        t = np.linspace(0.0, t_end, 4001)
+        return float(np.max(np.abs(exc.displacement(t))))
+
+    def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
+        import mujoco
+
+        assert isinstance(settings, MujocoSettings)
+        self._model = mujoco.MjModel.from_xml_string(self.mjcf(scenario, settings))
+        self._data = mujoco.MjData(self._model)
+        self._step = mujoco.mj_step
+        n = scenario.n_blocks
+        self._n = n
+        # blocks come first in the body tree: their free-joint qpos is (x, y, z, qw, qx, qy, qz)
+        self._pose_view = self._data.qpos[: 7 * n].reshape(n, 7)
+        self._poses = np.empty((n, 7))
+        self._dt = float(self._model.opt.timestep)
+        self._exc = scenario.excitation
+        self._chunk_start = -1
+        if not scenario.excitation.is_free:
+            self._jq = 7 * n  # slide joint: after the n free joints
+            self._jv = 6 * n
+            self._mbase = float(self._model.body_mass[n + 1])
+        mujoco.mj_forward(self._model, self._data)
+        return self._dt
+
+    # ------------------------------------------------------------------ drive
+    def _load_chunk(self, i0: int) -> None:
+        """Precompute base displacement, velocity and step force for steps i0…i0+_CHUNK."""
+        dt = self._dt
+        t = (i0 + np.arange(_CHUNK + 1)) * dt
+        v = self._exc.velocity(t)
+        self._u = np.asarray(self._exc.displacement(t), float)
+        self._v = np.asarray(v, float)
+        # the force that takes the base from v(t) to v(t + dt) in one (semi-implicit) step
+        self._f = self._mbase * np.diff(self._v) / dt
+        self._chunk_start = i0
+
+    def _drive_base(self, t: float, dt: float) -> None:
+        i = int(round(t / self._dt))
+        j = i - self._chunk_start
+        if self._chunk_start < 0 or j >= _CHUNK or j < 0:
+            self._load_chunk(i)
+            j = 0
+        d = self._data
+        d.qpos[self._jq] = self._u[j]
+        d.qvel[self._jv] = self._v[j]
+        d.qfrc_applied[self._jv] = self._f[j]
+
+    def _fix_base(self) -> bool:
+        m, d = self._model, self._data
+        d.qvel[self._jv] = 0.0
+        d.qfrc_applied[self._jv] = 0.0
+        # implicit damping ≫ mass/dt: any contact push is absorbed within the step
+        m.dof_damping[self._jv] = 1.0e6 * self._mbase / self._dt
+        return True
+
+    # ------------------------------------------------------------------ step/read
+    def _advance(self, n: int) -> None:
+        self._step(self._model, self._data, n)
+
+    def _read_poses(self) -> np.ndarray:
+        np.copyto(self._poses, self._pose_view)
+        return self._poses
+
+    def _teardown(self) -> None:
+        self._model = None
+        self._data = None
+        self._pose_view = None
