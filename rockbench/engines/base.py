@@ -16,7 +16,9 @@ Contract for implementers (the numbered rules that every plugin follows)
    Return the physics time step actually used.
 4. Implement :meth:`_drive_base`: before a step starting at time ``t``, impose
    the base motion from ``scenario.excitation`` (velocity and/or displacement,
-   never tilted gravity). It is called before every step while the base moves.
+   never tilted gravity). It is called before every step while the base moves,
+   by :meth:`_advance_driven`, which an engine may override to take many driven
+   steps in one call (e.g. a compiled loop over precomputed base velocities).
 5. Optionally implement :meth:`_fix_base` (called once when the excitation has
    ended): make the base still and return True so that steps can be batched.
 6. Implement :meth:`_advance`: take ``n`` physics steps.
@@ -210,10 +212,8 @@ class Engine(ABC):
                 self._advance(k)
                 step += k
             else:
-                for _ in range(k):
-                    self._drive_base(step * dt, dt)
-                    self._advance(1)
-                    step += 1
+                self._advance_driven(step * dt, k, dt)
+                step += k
                 if step * dt > exc.end_time:
                     batched = self._fix_base()
             poses[i] = self._read_poses()
@@ -233,8 +233,9 @@ class Engine(ABC):
         moving = not exc.is_free
         while i < n_out:
             if moving:
-                self._drive_base(step * dt, dt)
-            self._advance(1)
+                self._advance_driven(step * dt, 1, dt)
+            else:
+                self._advance(1)
             step += 1
             if moving and step * dt > exc.end_time and self._fix_base():
                 moving = False
@@ -265,6 +266,16 @@ class Engine(ABC):
     @abstractmethod
     def _drive_base(self, t: float, dt: float) -> None:
         """Impose the base motion for the step [t, t + dt] (rule 4)."""
+
+    def _advance_driven(self, t0: float, n: int, dt: float) -> None:
+        """Take ``n`` steps from ``t0`` while driving the base (rule 4).
+
+        The default calls :meth:`_drive_base` then ``_advance(1)`` per step; an
+        engine that can drive the base inside a compiled loop overrides this.
+        """
+        for j in range(n):
+            self._drive_base(t0 + j * dt, dt)
+            self._advance(1)
 
     def _fix_base(self) -> bool:
         """Hold the base still after the excitation (rule 5); True if steps may be batched."""
