@@ -171,6 +171,9 @@ class Engine(ABC):
         start = time.perf_counter()
         try:
             traj = self._run(scenario, s, meta)
+        except UnsupportedScenario as exc:  # raised by _build when it depends on settings
+            traj = Trajectory.failed(Status.UNSUPPORTED, str(exc), n_blocks=scenario.n_blocks,
+                                     **meta)
         finally:
             self._teardown()
         traj.wall_time = time.perf_counter() - start

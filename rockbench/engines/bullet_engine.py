@@ -1,0 +1,422 @@
+"""pybullet (Bullet 3) engine plugin.
+
+Scene: one collision shape per block (box, convex hull of the block's prism, or a
+concave triangle mesh), a box ground whose top face is z = 0, every body with zero
+damping, sleeping disabled and friction/restitution such that Bullet's *products*
+of the two bodies' coefficients equal the scenario's values. Each run owns a
+DIRECT-mode client (``pybullet.connect(pybullet.DIRECT)``), disconnected in
+``_teardown``.
+
+Measured pitfalls this module works around (see docs/engine-notes.md):
+
+* Bullet combines friction and restitution of two bodies as a product, so each
+  body gets sqrt(μ) and sqrt(e).
+* Default linear/angular damping is 0.04: set to 0.
+* ``contactBreakingThreshold`` (default 0.02 m) keeps the lifted pivot's contact
+  points in the manifold while the edge is less than 2 cm above the ground; this
+  perturbs every rocking cycle (0.02–0.1 λ error on B0). It is a *process-global*
+  variable in Bullet, so it is set on every build. ``contactSlop`` (default
+  1e-3 m) lets contacts sink; 0 is far more accurate.
+* A mass-0 body in maximal coordinates is a static btRigidBody: the solver ignores
+  its velocity, so friction would not drag a block. A moving base is therefore a
+  fixed-base btMultiBody (mass 0) whose base velocity is prescribed every step;
+  Bullet uses that velocity in the contact constraints and integrates its position.
+* ``changeDynamics(localInertiaDiagonal=...)`` on a maximal-coordinate body resets
+  its mass to 0 unless the mass is passed in the same call.
+* ``setPhysicsEngineParameter(numSubSteps=n, fixedTimeStep=n·dt)`` makes one
+  ``stepSimulation`` call advance n internal steps of dt (bit-identical to n
+  separate calls), which removes the Python overhead in free rocking.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+
+from rockbench.engines.base import Capabilities, Engine
+from rockbench.engines.settings import EngineSettings
+from rockbench.errors import UnsupportedScenario
+from rockbench.scenarios import Scenario
+
+try:  # the registry reports a missing library as "unavailable"
+    import pybullet as _pb
+except ImportError as _exc:  # pragma: no cover - exercised only without pybullet
+    raise ImportError(f"pybullet is not installed ({_exc})") from _exc
+
+__all__ = ["BulletEngine", "BulletSettings"]
+
+#: Collision margin of hull and mesh blocks when ``collision_margin`` is None (m).
+_DEFAULT_HULL_MARGIN = 1e-4
+
+_SOLVERS = {
+    "si": _pb.CONSTRAINT_SOLVER_LCP_SI,
+    "pgs": _pb.CONSTRAINT_SOLVER_LCP_PGS,
+    "dantzig": _pb.CONSTRAINT_SOLVER_LCP_DANTZIG,
+}
+
+
+@dataclass(frozen=True)
+class BulletSettings(EngineSettings):
+    """Knobs of the pybullet engine (defaults = the ``accurate`` preset).
+
+    Parameters
+    ----------
+    fps : float
+        Frame rate of the paper's Blender set-up (frames per second). With
+        ``substeps`` it sets the time step Δt = 1 / ((substeps + 1) · fps).
+    substeps : int
+        Sub-steps per frame n_s (paper: 2, 20, 200).
+    timestep : float or None
+        Explicit physics time step in s; overrides ``fps``/``substeps``. In both
+        cases the step is rounded so that a whole number of steps fits one output
+        interval (the effective step is recorded in the trajectory's settings).
+    solver_iterations : int
+        ``numSolverIterations`` of the sequential-impulse solver (paper: 10, 100, 1000).
+    solver : {"si", "pgs", "dantzig"}
+        ``constraintSolverType``: Bullet's sequential impulse (default) or the
+        MLCP solvers (projected Gauss–Seidel, Dantzig).
+    solver_residual_threshold : float
+        Early exit of the iterations once the residual is below this value.
+    collision_shape : {"box", "convex", "mesh"}
+        Block shape: ``btBoxShape`` (box–box contact is exact, no margin at the
+        corners), convex hull of the block prism's vertices (``GEOM_MESH``, also
+        used for chamfers whatever this knob says), or a concave triangle mesh
+        (``GEOM_MESH`` + ``GEOM_FORCE_CONCAVE_TRIMESH``). Bullet collides a dynamic
+        concave mesh only with convex shapes, so "mesh" supports single blocks
+        only (a stack raises :class:`UnsupportedScenario`).
+    collision_margin : float or None
+        Collision margin of the block shapes in m (paper: 1e-3, 1e-5, 1e-6);
+        None keeps pybullet's default (1e-3 m). Convex hulls are inflated by it.
+    enable_sat : bool
+        Separating-axis test for convex hulls (full contact manifolds).
+    contact_breaking_threshold : float
+        Distance (m) beyond which manifold points are dropped (Bullet default
+        0.02; 1e-3 is far more accurate for rocking, see the module docstring).
+    contact_slop : float
+        Penetration (m) tolerated without correction (Bullet default 1e-3).
+    erp, contact_erp, friction_erp : float
+        Error-reduction parameters of joints, contacts and friction.
+    split_impulse : bool
+        Solve penetrations deeper than ``split_impulse_threshold`` with a split
+        (position-only) impulse instead of Baumgarte velocity terms.
+    split_impulse_threshold : float
+        ``splitImpulsePenetrationThreshold`` (m, negative: penetration depth).
+    warm_starting_factor : float
+        Fraction of last step's impulses used to start the iterations.
+    cone_friction : bool
+        Friction cone instead of Bullet's two-direction friction pyramid.
+    maximal_coordinates : bool
+        Blocks as ``btRigidBody`` (True, ~2× faster) or free-floating ``btMultiBody``.
+    restitution : float or None
+        Restitution of every contact; None uses the scenario's. Bullet multiplies
+        the bodies' coefficients, so each body gets its square root.
+    restitution_velocity_threshold : float
+        Approach speed (m/s) below which Bullet applies no restitution.
+    """
+
+    fps: float = 1000.0
+    substeps: int = 9
+    timestep: float | None = None
+    solver_iterations: int = 50
+    solver: Literal["si", "pgs", "dantzig"] = "si"
+    solver_residual_threshold: float = 1e-7
+    collision_shape: Literal["box", "convex", "mesh"] = "box"
+    collision_margin: float | None = None
+    enable_sat: bool = False
+    contact_breaking_threshold: float = 1e-3
+    contact_slop: float = 0.0
+    erp: float = 0.2
+    contact_erp: float = 0.2
+    friction_erp: float = 0.2
+    split_impulse: bool = True
+    split_impulse_threshold: float = -0.04
+    warm_starting_factor: float = 0.85
+    cone_friction: bool = True
+    maximal_coordinates: bool = True
+    restitution: float | None = None
+    restitution_velocity_threshold: float = 0.2
+
+    def __post_init__(self) -> None:
+        if not (self.fps > 0 and math.isfinite(self.fps)):
+            raise ValueError(f"fps must be positive, got {self.fps!r}")
+        if self.substeps < 0:
+            raise ValueError(f"substeps must be >= 0, got {self.substeps!r}")
+        if self.timestep is not None and not (0 < self.timestep < math.inf):
+            raise ValueError(f"timestep must be positive, got {self.timestep!r}")
+        if self.solver_iterations < 1:
+            raise ValueError("solver_iterations must be >= 1")
+        if self.collision_margin is not None and self.collision_margin < 0:
+            raise ValueError("collision_margin must be >= 0")
+        if self.contact_breaking_threshold <= 0:
+            raise ValueError("contact_breaking_threshold must be > 0")
+        if self.restitution is not None and not 0 <= self.restitution <= 1:
+            raise ValueError("restitution must be in [0, 1]")
+
+    @property
+    def dt(self) -> float:
+        """Requested physics time step (s) before rounding to the output interval."""
+        if self.timestep is not None:
+            return self.timestep
+        return 1.0 / ((self.substeps + 1) * self.fps)
+
+
+class BulletEngine(Engine):
+    """Bullet 3 through pybullet, one DIRECT client per simulation."""
+
+    name: ClassVar[str] = "bullet"
+    capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
+                                                         chamfer=True)
+    Settings: ClassVar[type[EngineSettings]] = BulletSettings
+    presets: ClassVar[dict[str, dict[str, Any]]] = {
+        # 0.1 ms steps (fps 1000 × 10 sub-steps): ≤ 5e-3 λ on the free-rocking catalog
+        "accurate": {},
+        # 1 ms steps, no sub-steps: ≤ 0.05 λ at ~10× less cost
+        "fast": {"substeps": 0},
+    }
+    install_hint: ClassVar[str] = "pip install pybullet"
+
+    def __init__(self) -> None:
+        self._cid: int | None = None
+
+    @classmethod
+    def version(cls) -> str:
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            return version("pybullet")
+        except PackageNotFoundError:  # pragma: no cover - e.g. a source build
+            return str(_pb.getAPIVersion())
+
+    # ------------------------------------------------------------------ hooks
+    def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
+        s: BulletSettings = settings  # type: ignore[assignment]
+        if s.collision_shape == "mesh" and scenario.n_blocks > 1:
+            # settings are not visible to _check_supported, hence here
+            raise UnsupportedScenario(
+                "bullet: collision_shape='mesh' cannot model stacks (Bullet does not "
+                "collide two concave triangle meshes)")
+        out_dt = 1.0 / scenario.output_rate
+        if s.dt <= out_dt * (1.0 + 1e-9):
+            # a whole number of steps per output interval lets steps be batched
+            dt = out_dt / max(1, round(out_dt / s.dt))
+        else:  # coarser than the output (the paper's low frame rates): interpolated
+            dt = s.dt
+        self._dt = dt
+        pb = _pb
+        cid = pb.connect(pb.DIRECT)
+        self._cid = cid
+        kw = {"physicsClientId": cid}
+        self._kw = kw
+        pb.setGravity(0.0, 0.0, -scenario.g, **kw)
+        # contactBreakingThreshold is process-global in Bullet: always set it
+        pb.setPhysicsEngineParameter(
+            fixedTimeStep=dt, numSubSteps=0, numSolverIterations=s.solver_iterations,
+            constraintSolverType=_SOLVERS[s.solver],
+            solverResidualThreshold=s.solver_residual_threshold,
+            contactBreakingThreshold=s.contact_breaking_threshold,
+            contactSlop=s.contact_slop, erp=s.erp, contactERP=s.contact_erp,
+            frictionERP=s.friction_erp, useSplitImpulse=int(s.split_impulse),
+            splitImpulsePenetrationThreshold=s.split_impulse_threshold,
+            warmStartingFactor=s.warm_starting_factor, enableConeFriction=int(s.cone_friction),
+            enableSAT=int(s.enable_sat),
+            restitutionVelocityThreshold=s.restitution_velocity_threshold,
+            deterministicOverlappingPairs=1, **kw)
+        self._substeps = 0
+        self._margin = s.collision_margin
+        self._shape = s.collision_shape
+        # hulls/meshes: the margin actually applied (pybullet's default is 1e-3 m)
+        self._hull_margin = _DEFAULT_HULL_MARGIN if s.collision_margin is None \
+            else s.collision_margin
+
+        blocks = scenario.blocks
+        height = scenario.stack.total_height
+        exc = scenario.excitation
+        reach = max(b.b for b in blocks) + height
+        if not exc.is_free:
+            t = np.linspace(0.0, min(scenario.duration, exc.end_time), 4001)
+            reach += float(np.max(np.abs(exc.displacement(t))))
+        ground_half = (max(1.0, 2.0 * reach), max(1.0, 2.0 * reach, max(b.depth for b in blocks)),
+                       0.5)
+        self._ground_z = -ground_half[2]
+        gshape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=ground_half, **kw)
+        # a moving base must be a fixed-base multibody: Bullet ignores the velocity
+        # of a static (mass 0) btRigidBody in contacts
+        moving = not exc.is_free
+        ground_maximal = s.maximal_coordinates and not moving
+        self._ground = pb.createMultiBody(0.0, gshape, basePosition=(0.0, 0.0, self._ground_z),
+                                          useMaximalCoordinates=ground_maximal, **kw)
+
+        mu = math.sqrt(scenario.contact.friction)
+        e = scenario.contact.restitution if s.restitution is None else s.restitution
+        rest = math.sqrt(e)
+        self._set_dynamics(self._ground, mu, rest, None)
+
+        centroids, th0 = scenario.initial_poses()
+        quat = (0.0, math.sin(0.5 * th0), 0.0, math.cos(0.5 * th0))
+        self._bodies: list[int] = []
+        for blk, (cx, cz) in zip(blocks, centroids, strict=True):
+            shape = self._block_shape(blk, s)
+            body = pb.createMultiBody(blk.m, shape, basePosition=(float(cx), 0.0, float(cz)),
+                                      baseOrientation=quat,
+                                      useMaximalCoordinates=s.maximal_coordinates, **kw)
+            self._set_dynamics(body, mu, rest, blk)
+            self._bodies.append(body)
+        self._poses = np.empty((len(blocks), 7))
+
+        # base kinematics per step, precomputed: position u(t_i) and the secant
+        # velocity (u(t_{i+1}) − u(t_i)) / dt, so that Bullet's integration of the
+        # base lands exactly on u(t_{i+1}) and the block feels ü_g at mid-step
+        if moving:
+            end = min(scenario.duration, exc.end_time)
+            n = int(math.ceil(end / dt)) + int(math.ceil(out_dt / dt)) + 2
+            ti = np.arange(n + 1) * dt
+            u = np.asarray(exc.displacement(ti), float)
+            self._u = u.tolist()
+            self._v = (np.diff(u) / dt).tolist()
+            self._u_end = float(exc.displacement(end))
+        return dt
+
+    def _block_shape(self, blk: Any, s: BulletSettings) -> int:
+        pb, kw = _pb, self._kw
+        hy = 0.5 * blk.depth
+        if self._is_box(blk):
+            shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=(blk.b, hy, blk.h), **kw)
+        else:
+            # Bullet inflates hulls and triangles by the collision margin: shrink the
+            # prism by it so that the swept shape has the block's faces exactly
+            m = self._hull_margin
+            prof = _offset_polygon(blk.profile(), m)
+            yy = hy - m
+            verts = [(float(x), y, float(z)) for x, z in prof for y in (-yy, yy)]
+            if s.collision_shape == "mesh":
+                indices = _prism_triangles(len(prof))
+                shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=verts, indices=indices,
+                                                flags=pb.GEOM_FORCE_CONCAVE_TRIMESH, **kw)
+            else:
+                shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=verts, **kw)
+        if shape < 0:  # pragma: no cover - pybullet signals failure by -1
+            raise RuntimeError("pybullet could not create the block collision shape")
+        return shape
+
+    def _is_box(self, blk: Any) -> bool:
+        return self._shape == "box" and blk.chamfer == 0.0
+
+    def _set_dynamics(self, body: int, mu: float, rest: float, blk: Any) -> None:
+        pb, kw = _pb, self._kw
+        extra: dict[str, Any] = {}
+        if blk is not None:
+            # box inertia (chamfer corners neglected, as the analytic models do);
+            # the mass must be repeated or maximal-coordinate bodies lose it
+            extra = {"mass": blk.m, "localInertiaDiagonal": tuple(float(i) for i in blk.inertia)}
+            if self._margin is not None or not self._is_box(blk):
+                extra["collisionMargin"] = self._hull_margin if not self._is_box(blk) \
+                    else self._margin
+        pb.changeDynamics(body, -1, lateralFriction=mu, restitution=rest, rollingFriction=0.0,
+                          spinningFriction=0.0, linearDamping=0.0, angularDamping=0.0,
+                          activationState=pb.ACTIVATION_STATE_DISABLE_SLEEPING, **extra, **kw)
+
+    def _drive_base(self, t: float, dt: float) -> None:
+        i = int(round(t / self._dt))
+        if i < len(self._v):
+            u, v = self._u[i], self._v[i]
+        else:  # beyond the precomputed window (should not happen): hold still
+            u, v = self._u_end, 0.0
+        pb, g, kw = _pb, self._ground, self._kw
+        pb.resetBasePositionAndOrientation(g, (u, 0.0, self._ground_z), (0.0, 0.0, 0.0, 1.0), **kw)
+        pb.resetBaseVelocity(g, (v, 0.0, 0.0), (0.0, 0.0, 0.0), **kw)
+
+    def _fix_base(self) -> bool:
+        pb, g, kw = _pb, self._ground, self._kw
+        pb.resetBasePositionAndOrientation(g, (self._u_end, 0.0, self._ground_z),
+                                           (0.0, 0.0, 0.0, 1.0), **kw)
+        pb.resetBaseVelocity(g, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), **kw)
+        return True
+
+    def _advance(self, n: int) -> None:
+        pb, kw = _pb, self._kw
+        if n == 1:
+            if self._substeps != 0:
+                pb.setPhysicsEngineParameter(fixedTimeStep=self._dt, numSubSteps=0, **kw)
+                self._substeps = 0
+            pb.stepSimulation(**kw)
+            return
+        if self._substeps != n:
+            if _substeps_exact(n, self._dt):
+                pb.setPhysicsEngineParameter(fixedTimeStep=n * self._dt, numSubSteps=n, **kw)
+                self._substeps = n
+            else:  # Bullet's accumulator would take n − 1 steps: step one by one
+                if self._substeps != 0:
+                    pb.setPhysicsEngineParameter(fixedTimeStep=self._dt, numSubSteps=0, **kw)
+                    self._substeps = 0
+                for _ in range(n):
+                    pb.stepSimulation(**kw)
+                return
+        pb.stepSimulation(**kw)
+
+    def _read_poses(self) -> np.ndarray:
+        pb, kw, out = _pb, self._kw, self._poses
+        for i, body in enumerate(self._bodies):
+            (x, y, z), (qx, qy, qz, qw) = pb.getBasePositionAndOrientation(body, **kw)
+            out[i] = (x, y, z, qw, qx, qy, qz)
+        return out
+
+    def _teardown(self) -> None:
+        if self._cid is not None:
+            try:
+                _pb.disconnect(physicsClientId=self._cid)
+            finally:
+                self._cid = None
+
+
+def _substeps_exact(n: int, dt: float) -> bool:
+    """True if Bullet's fixed-step accumulator takes exactly n steps of dt per call.
+
+    Bullet computes ``int(local_time / (frame / n))`` in double precision; emulate it
+    over a few calls so that a rounding down to n − 1 steps is caught.
+    """
+    frame = n * dt
+    fixed = frame / n
+    local = 0.0
+    for _ in range(4):
+        local += frame
+        steps = int(local / fixed)
+        if steps != n:
+            return False
+        local -= steps * fixed
+    return True
+
+
+def _offset_polygon(poly: np.ndarray, m: float) -> np.ndarray:
+    """Move every edge of a convex counter-clockwise polygon inward by ``m``."""
+    if m == 0.0:
+        return poly
+    out = np.empty_like(poly)
+    k = len(poly)
+    for j in range(k):
+        p0, p1, p2 = poly[j - 1], poly[j], poly[(j + 1) % k]
+        # inward normals of the edges before and after vertex j (CCW: rotate by +90°)
+        d1, d2 = (p1 - p0) / np.linalg.norm(p1 - p0), (p2 - p1) / np.linalg.norm(p2 - p1)
+        n1, n2 = np.array([-d1[1], d1[0]]), np.array([-d2[1], d2[0]])
+        # the vertex moves along n1 + n2 so that it is m from both edges
+        bis = n1 + n2
+        out[j] = p1 + bis * (m / float(bis @ n1))
+    return out
+
+
+def _prism_triangles(k: int) -> list[int]:
+    """Triangle indices of a prism whose vertex 2j is (profile j, y−) and 2j+1 is (j, y+).
+
+    Outward normals for a counter-clockwise profile in the x–z plane.
+    """
+    tri: list[int] = []
+    for j in range(k):
+        a0, a1 = 2 * j, 2 * j + 1
+        b0, b1 = 2 * ((j + 1) % k), 2 * ((j + 1) % k) + 1
+        tri += [a0, b1, b0, a0, a1, b1]
+    for j in range(1, k - 1):  # caps: fans from vertex 0
+        tri += [0, 2 * j, 2 * (j + 1)]
+        tri += [1, 2 * (j + 1) + 1, 2 * j + 1]
+    return tri

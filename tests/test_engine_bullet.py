@@ -1,0 +1,169 @@
+"""Physics tests of the pybullet engine plugin against the Housner reference."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pybullet")
+
+from rockbench.analytic.housner import single_block_reference  # noqa: E402
+from rockbench.engines import SettingsError, get_engine  # noqa: E402
+from rockbench.engines.bullet_engine import BulletEngine, BulletSettings  # noqa: E402
+from rockbench.metrics import impact_times  # noqa: E402
+from rockbench.scenarios import Block, Scenario, SinePulse, get_scenario  # noqa: E402
+from rockbench.trajectory import Status  # noqa: E402
+
+
+def zero_crossings(t: np.ndarray, th: np.ndarray) -> np.ndarray:
+    s = np.sign(th)
+    i = np.nonzero(s[1:] * s[:-1] < 0)[0]
+    return t[i] - th[i] * (t[i + 1] - t[i]) / (th[i + 1] - th[i])
+
+
+@pytest.fixture(scope="module")
+def engine() -> BulletEngine:
+    eng = get_engine("bullet")
+    assert isinstance(eng, BulletEngine)
+    return eng
+
+
+@pytest.fixture(scope="module")
+def b2() -> Scenario:
+    return get_scenario("free-b2-0.5").replace(duration=6.0)
+
+
+@pytest.fixture(scope="module")
+def b2_ref(b2: Scenario):
+    return single_block_reference(b2)
+
+
+def test_registry_and_presets(engine: BulletEngine) -> None:
+    assert engine.name == "bullet"
+    assert engine.version().startswith("3.")
+    assert {"accurate", "fast"} <= set(engine.presets)
+    # defaults are the accurate preset
+    assert engine.settings("accurate") == engine.Settings()
+    assert engine.settings().dt == pytest.approx(1e-4)
+    assert engine.settings("fast").dt == pytest.approx(1e-3)
+    # the paper's Δt = 1 / ((n_s + 1) · FPS) and the explicit override
+    assert engine.settings(fps=240, substeps=20).dt == pytest.approx(1 / (21 * 240))
+    assert engine.settings(substeps="3", timestep="2e-4").dt == pytest.approx(2e-4)
+    with pytest.raises(SettingsError):
+        engine.settings(collision_shape="sphere")
+    with pytest.raises(SettingsError):
+        engine.settings(substeps=-1)
+
+
+def test_free_rocking_accurate(engine: BulletEngine, b2: Scenario, b2_ref) -> None:
+    tr = engine.simulate(b2, "accurate")
+    assert tr.status == Status.OK
+    lam = b2.critical_angle
+    err = np.max(np.abs(tr.theta[:, 0] - b2_ref.theta[:, 0])) / lam
+    assert err <= 5e-3
+    zc = zero_crossings(tr.t, tr.theta[:, 0])[:3]
+    np.testing.assert_allclose(zc, b2_ref.impacts[:3], rtol=5e-3)
+    assert tr.settings["effective_timestep"] == pytest.approx(1e-4)
+    # Bullet's friction pyramid lets the block twist slightly out of plane
+    assert np.max(tr.wobble) < 1e-2
+
+
+def test_free_rocking_fast(engine: BulletEngine) -> None:
+    sc = get_scenario("free-b1-0.5").replace(duration=6.0)
+    ref = single_block_reference(sc)
+    tr = engine.simulate(sc, "fast")
+    assert tr.status == Status.OK
+    assert np.max(np.abs(tr.theta[:, 0] - ref.theta[:, 0])) / sc.critical_angle <= 0.05
+
+
+def test_sine_pulse_peak(engine: BulletEngine) -> None:
+    sc = get_scenario("single-pulse-3.0hz-8mm").replace(duration=1.5)
+    ref = single_block_reference(sc)
+    tr = engine.simulate(sc, "accurate")
+    assert tr.status == Status.OK
+    peak, peak_ref = np.max(np.abs(tr.theta)), np.max(np.abs(ref.theta))
+    assert peak == pytest.approx(peak_ref, rel=0.02)
+    # a positive base acceleration tips the block to θ < 0 first, as in the reference
+    first = np.argmax(np.abs(tr.theta[:, 0]) > 1e-3 * sc.critical_angle)
+    assert tr.theta[first, 0] < 0 and ref.theta[first, 0] < 0
+
+
+def test_base_drags_block(engine: BulletEngine) -> None:
+    # sub-threshold pulse on a squat block: no uplift, the block rides on the base
+    sc = Scenario("ride", Block(1.0, 0.5, 0.5, mass=10.0), excitation=SinePulse(2.0, 0.002),
+                  duration=1.0)
+    tr = engine.simulate(sc, "fast")
+    assert tr.status == Status.OK
+    assert np.max(np.abs(tr.theta)) < 1e-4
+    u = sc.excitation.displacement(tr.t)
+    assert np.max(np.abs(tr.x[:, 0] - u)) < 1e-4
+    assert tr.x[-1, 0] == pytest.approx(2 * math.pi * 0.002, abs=1e-4)
+
+
+def test_stack_at_rest_stays_at_rest(engine: BulletEngine) -> None:
+    stack = get_scenario("stack-pulse-4.0hz-4mm").stack
+    sc = Scenario("rest", stack, duration=2.0)
+    tr = engine.simulate(sc, "fast")
+    assert tr.status == Status.OK
+    assert np.max(np.abs(tr.theta)) < 1e-5
+    assert np.max(np.abs(tr.x - tr.x[0])) < 1e-5
+    assert np.max(np.abs(tr.z - tr.z[0])) < 1e-5
+
+
+def test_stack_pulse_runs(engine: BulletEngine) -> None:
+    sc = get_scenario("stack-pulse-5.0hz-4mm").replace(duration=1.5)
+    tr = engine.simulate(sc, "fast")
+    assert tr.status == Status.OK
+    assert tr.theta.shape == (tr.t.size, 2)
+    assert 0.0 < np.max(np.abs(tr.theta)) < sc.critical_angle
+
+
+@pytest.mark.parametrize("shape", ["convex", "mesh"])
+def test_hull_and_mesh_shapes(engine: BulletEngine, b2: Scenario, b2_ref, shape: str) -> None:
+    sc = b2.replace(duration=3.0)
+    tr = engine.simulate(sc, {"preset": "fast", "collision_shape": shape})
+    assert tr.status == Status.OK
+    n = tr.t.size
+    assert np.max(np.abs(tr.theta[:, 0] - b2_ref.theta[:n, 0])) / sc.critical_angle < 0.05
+
+
+def test_knob_overrides_take_effect(engine: BulletEngine, b2: Scenario) -> None:
+    sc = b2.replace(duration=2.0)
+    fine = engine.simulate(sc, "fast")
+    # Δt = 1 / ((n_s + 1) · fps): 250 fps × 4 is the same 1 ms step
+    same = engine.simulate(sc, {"preset": "fast", "fps": 250.0, "substeps": 3})
+    assert same.settings["effective_timestep"] == pytest.approx(1e-3)
+    np.testing.assert_array_equal(same.theta, fine.theta)
+    other = engine.simulate(sc, {"preset": "fast", "contact_breaking_threshold": 0.02})
+    assert np.max(np.abs(other.theta - fine.theta)) > 1e-6
+    # the breaking threshold is global in Bullet: a later run must not inherit it
+    again = engine.simulate(sc, "fast")
+    np.testing.assert_array_equal(again.theta, fine.theta)
+    half = engine.simulate(sc, {"preset": "fast", "timestep": 5e-4})
+    assert half.settings["effective_timestep"] == pytest.approx(5e-4)
+    assert np.max(np.abs(half.theta - fine.theta)) > 1e-6
+
+
+def test_time_step_longer_than_output_interval(engine: BulletEngine, b2: Scenario) -> None:
+    # the paper's 240 fps without sub-steps: Δt = 4.2 ms > the 1 ms output interval;
+    # samples are interpolated onto the output clock and the rocking is still Housner's
+    traj = engine.simulate(b2, {"fps": 240.0, "substeps": 0})
+    assert traj.status is Status.OK
+    np.testing.assert_allclose(np.diff(traj.t), 1e-3)
+    assert traj.settings["effective_timestep"] == pytest.approx(1 / 240)
+    first = impact_times(traj)[0]
+    assert first == pytest.approx(float(impact_times(single_block_reference(b2))[0]), rel=0.03)
+
+
+def test_mesh_stack_unsupported(engine: BulletEngine) -> None:
+    sc = Scenario("rest", get_scenario("stack-pulse-4.0hz-4mm").stack, duration=0.1)
+    traj = engine.simulate(sc, {"collision_shape": "mesh"})
+    assert traj.status is Status.UNSUPPORTED and "concave" in traj.message
+
+
+def test_settings_dataclass_is_frozen() -> None:
+    s = BulletSettings()
+    with pytest.raises(AttributeError):
+        s.fps = 10.0  # type: ignore[misc]
