@@ -308,7 +308,7 @@ class _Watchdog:
     """
 
     #: Seconds of output per check.
-    PERIOD = 0.05
+    PERIOD = 0.25
 
     def __init__(self, scenario: Scenario) -> None:
         self.masses = np.array([b.m for b in scenario.blocks])

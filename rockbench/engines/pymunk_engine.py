@@ -1,0 +1,311 @@
+"""pymunk (Chipmunk2D) engine plugin: planar rocking in the x–z plane.
+
+pymunk is a 2D engine; its (x, y) plane is our (x, z) plane. Its angle is
+counter-clockwise positive, while our θ (rotation about +y) is positive when a
+block's top moves toward +x (clockwise in pymunk's plane), so θ = −angle and the
+returned quaternion is a rotation θ about +y: (cos θ/2, 0, sin θ/2, 0).
+
+Scene: one dynamic body per block with a convex :class:`pymunk.Poly` from
+:meth:`Block.profile` (chamfers included, radius 0), mass ``Block.m`` and moment
+``Block.inertia[1]`` (the depth only scales the mass, so any planar stack is
+exact), and a KINEMATIC base body carrying a box whose top face is z = 0.
+
+Base driving: before each step starting at t the base gets the velocity
+u̇_g(t + dt/2) (midpoint rule: the position integrated by Chipmunk over the step
+is then exact to O(dt³), and the contact solver sees the mean velocity of the
+step). Chipmunk integrates a kinematic body's position as p += v dt, so the
+midpoint errors would accumulate to O(dt²) drift; the position is therefore
+reset to the exact u_g(t) at every step start. Both series are precomputed
+once (vectorised); :meth:`_advance_driven` drives and steps in one tight loop.
+
+Pitfalls handled (see docs/engine-notes.md): Chipmunk's default
+``collision_slop`` of 0.1 m lets shapes sink 0.1 m (set to 0 by default here);
+sleeping is disabled; ``damping`` is 1 (none); Chipmunk multiplies the friction
+and elasticity of the two shapes in contact, so every shape gets the square
+root of the scenario's coefficient and each contact pair sees exactly
+``scenario.contact.friction`` and ``scenario.contact.restitution``.
+
+Calibration (``benchmarks/calibrate_pymunk.py``, pymunk 7.3, free rocking B0–B3
+over 20 s and the six Single #2 pulses): ``accurate`` (dt 0.1 ms) max
+|θ − θ_ref| ≤ 0.0019 λ, impact times within 0.1 %, pulse peaks within 0.11 %;
+``fast`` (dt 1 ms) ≤ 0.015 λ, impact times within 0.42 %, peaks within 1.4 %.
+dt 0.2 ms already gives 0.0076 λ on B0, hence 0.1 ms for ``accurate``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from rockbench.engines.base import Capabilities, Engine
+from rockbench.engines.settings import EngineSettings
+from rockbench.errors import EngineUnavailable, UnsupportedScenario
+from rockbench.scenarios import Scenario
+
+__all__ = ["PymunkEngine", "PymunkSettings"]
+
+# Scenario fields known to be planar (x–z) or to act only through mass/inertia
+_PLANAR_BLOCK_FIELDS = frozenset({"width", "depth", "height", "density", "mass", "chamfer"})
+_PLANAR_STACK_FIELDS = frozenset({"blocks", "offsets"})
+
+
+def _is_set(value: Any) -> bool:
+    """True for a field value that differs from an empty/zero default."""
+    try:
+        return bool(np.any(np.asarray(value, dtype=float) != 0.0))
+    except (TypeError, ValueError):
+        return bool(value)
+
+
+def _pymunk() -> Any:
+    try:
+        import pymunk
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise EngineUnavailable(
+            f"pymunk is not installed ({exc}); pip install 'rockbench[pymunk]'"
+        ) from None
+    return pymunk
+
+
+@dataclass(frozen=True)
+class PymunkSettings(EngineSettings):
+    """Knobs of the pymunk engine (defaults = the ``accurate`` preset).
+
+    Presets: ``accurate`` (the defaults: dt 0.1 ms, 20 iterations),
+    ``fast`` (dt 1 ms, 20 iterations) and ``fine`` (dt 0.05 ms, 50 iterations).
+
+    Parameters
+    ----------
+    timestep : float
+        Physics time step in s. The main accuracy lever: impacts are resolved
+        within one step and contact penetration scales with it. Best chosen
+        to divide the output interval (otherwise the base loop reads every
+        step and interpolates, which costs time).
+    iterations : int
+        Sequential-impulse solver iterations per step (pymunk default 10).
+        Gauss–Seidel sweeps the contact points in a fixed order, so too few
+        iterations break mirror symmetry at coarse steps (dt 1 ms: a mirrored
+        sine pulse differs by 0.020 λ with 10 iterations, 0.002 λ with 20).
+        With 20, single blocks match 50 and the paper stack's peak angles
+        change by < 0.2 % from 20 to 50.
+    collision_slop : float
+        Overlap in m that Chipmunk tolerates without correction (pymunk
+        default 0.1 m, far too large for blocks of a few metres; 0 here).
+    collision_bias : float
+        Fraction of overlap left uncorrected after one second (pymunk default
+        (1 − 0.1)^60 ≈ 1.8e-3). Smaller values push penetrating shapes apart
+        faster; the correction is position-level and adds no energy beyond
+        the overlap it removes.
+    """
+
+    timestep: float = 1e-4
+    iterations: int = 20
+    collision_slop: float = 0.0
+    collision_bias: float = (1.0 - 0.1) ** 60
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.timestep) and self.timestep > 0):
+            raise ValueError(f"timestep must be finite and > 0, got {self.timestep!r}")
+        if self.iterations < 1:
+            raise ValueError(f"iterations must be >= 1, got {self.iterations!r}")
+        if not (math.isfinite(self.collision_slop) and self.collision_slop >= 0):
+            raise ValueError(f"collision_slop must be finite and >= 0, got {self.collision_slop!r}")
+        if not (0.0 < self.collision_bias <= 1.0):
+            raise ValueError(f"collision_bias must be in (0, 1], got {self.collision_bias!r}")
+
+
+class PymunkEngine(Engine):
+    """Rocking blocks in pymunk (Chipmunk2D), a planar impulse-based engine."""
+
+    name: ClassVar[str] = "pymunk"
+    capabilities: ClassVar[Capabilities] = Capabilities(dimensions=2, max_blocks=None,
+                                                        chamfer=True)
+    Settings: ClassVar[type[EngineSettings]] = PymunkSettings
+    presets: ClassVar[dict[str, dict[str, Any]]] = {
+        "accurate": {},
+        # calibrated with benchmarks/calibrate_pymunk.py (figures in the module docstring)
+        "fast": {"timestep": 1e-3, "iterations": 20},
+        "fine": {"timestep": 5e-5, "iterations": 50},
+    }
+    install_hint: ClassVar[str] = "pip install 'rockbench[pymunk]'"
+
+    def __init__(self) -> None:
+        self._space: Any = None
+        self._blocks: list[Any] = []
+        self._base: Any = None
+        self._dt = 0.0
+        self._step: Any = None
+        self._space_ptr: Any = None
+        self._body_ptrs: list[Any] = []
+        self._poses = np.zeros((0, 7))
+        self._v_mid = np.zeros(1)
+        self._u_start = np.zeros(1)
+
+    @classmethod
+    def version(cls) -> str:
+        """Version of pymunk."""
+        return str(_pymunk().version)
+
+    # ------------------------------------------------------------------ hooks
+    def _check_supported(self, scenario: Scenario) -> None:
+        """Refuse out-of-plane content, which a planar engine cannot model.
+
+        Every field the scenario model has today is planar-symmetric (blocks
+        centred in depth, offsets along x, base motion along x; the depth only
+        scales mass and inertia), so every current scenario is supported. A
+        Block or Stack field this adapter does not know to be planar is
+        refused when it is set (truthy), rather than silently ignored.
+        """
+        for obj, known in ((scenario.stack, _PLANAR_STACK_FIELDS),) + tuple(
+            (b, _PLANAR_BLOCK_FIELDS) for b in scenario.blocks
+        ):
+            for f in dataclasses.fields(obj):
+                if f.name not in known and _is_set(getattr(obj, f.name)):
+                    raise UnsupportedScenario(
+                        f"pymunk is a 2D engine (x–z plane); {type(obj).__name__}.{f.name} "
+                        f"may describe out-of-plane content, which it cannot model"
+                    )
+
+    def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
+        pymunk = _pymunk()
+        s: PymunkSettings = settings  # type: ignore[assignment]
+        dt = float(s.timestep)
+        space = pymunk.Space()
+        space.gravity = (0.0, -scenario.g)
+        space.iterations = int(s.iterations)
+        space.collision_slop = float(s.collision_slop)
+        space.collision_bias = float(s.collision_bias)
+        space.damping = 1.0  # velocity kept each step: no hidden damping
+        space.sleep_time_threshold = math.inf  # never sleep
+        # Chipmunk multiplies the two shapes' coefficients: the square root on
+        # every shape gives each contact pair exactly the scenario's values
+        mu = math.sqrt(scenario.contact.friction)
+        e = math.sqrt(scenario.contact.restitution)
+
+        exc = scenario.excitation
+        h_tot = scenario.stack.total_height
+        w_max = max(b.width for b in scenario.blocks)
+        t_end = min(exc.end_time, scenario.duration) if not exc.is_free else 0.0
+        n_drive = int(math.ceil(t_end / dt)) + 2 if t_end > 0 else 0
+        if n_drive:
+            t0 = np.arange(n_drive) * dt
+            u_start = np.asarray(exc.displacement(t0), dtype=float)
+            v_mid = np.asarray(exc.velocity(t0 + 0.5 * dt), dtype=float)
+            u_max = float(np.max(np.abs(u_start)))
+        else:
+            u_start = v_mid = np.zeros(1)
+            u_max = 0.0
+        self._u_start, self._v_mid = u_start, v_mid
+
+        # base: wide enough for any toppled block plus the base travel, and
+        # thick enough that nothing tunnels through it
+        half = 2.0 * (h_tot + w_max) + u_max + 1.0
+        thick = max(1.0, 0.5 * h_tot)
+        base = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        base.position = (0.0, 0.0)
+        base_shape = pymunk.Poly(base, [(-half, -thick), (half, -thick), (half, 0.0),
+                                        (-half, 0.0)], radius=0.0)
+        base_shape.friction = mu
+        base_shape.elasticity = e
+        space.add(base, base_shape)
+
+        centroids, th0 = scenario.initial_poses()
+        blocks = []
+        for blk, (cx, cz) in zip(scenario.blocks, centroids, strict=True):
+            body = pymunk.Body(float(blk.m), float(blk.inertia[1]))
+            body.position = (float(cx), float(cz))
+            body.angle = -th0  # pymunk's angle is counter-clockwise: θ = −angle
+            shape = pymunk.Poly(body, [tuple(map(float, v)) for v in blk.profile()],
+                                radius=0.0)
+            shape.friction = mu
+            shape.elasticity = e
+            space.add(body, shape)
+            blocks.append(body)
+
+        self._space, self._base, self._blocks, self._dt = space, base, blocks, dt
+        try:  # the C step function and the space pointer behind pymunk's Space.step
+            from pymunk._chipmunk import lib
+
+            self._step, self._space_ptr = lib.cpSpaceStep, space._space
+            self._body_ptrs = [body._body for body in blocks]
+        except (ImportError, AttributeError):  # pragma: no cover - other pymunk layouts
+            self._step, self._space_ptr, self._body_ptrs = space.step, None, []
+        self._poses = np.zeros((len(blocks), 7))
+        return dt
+
+    def _drive_base(self, t: float, dt: float) -> None:
+        i = min(int(round(t / self._dt)), self._v_mid.size - 1)  # past the motion: hold
+        # exact position at the step start (no drift), midpoint velocity for the step
+        self._base.position = (float(self._u_start[i]), 0.0)
+        self._base.velocity = (float(self._v_mid[i]), 0.0)
+
+    def _advance_driven(self, t0: float, n: int, dt: float) -> None:
+        # the same as _drive_base + _advance(1) per step, in one tight loop
+        if self._space_ptr is None:  # pragma: no cover - other pymunk layouts
+            super()._advance_driven(t0, n, dt)
+            return
+        from pymunk._chipmunk import lib
+
+        set_pos, set_vel, bptr = lib.cpBodySetPosition, lib.cpBodySetVelocity, self._base._body
+        step, ptr, h = self._step, self._space_ptr, self._dt
+        i0 = int(round(t0 / h))
+        last = self._v_mid.size - 1
+        # this call's slice as plain floats (cheaper to index than numpy scalars);
+        # steps past the precomputed motion repeat its last, still, value
+        idx = np.minimum(np.arange(i0, i0 + n), last)
+        for u, v in zip(self._u_start[idx].tolist(), self._v_mid[idx].tolist(), strict=True):
+            set_pos(bptr, (u, 0.0))
+            set_vel(bptr, (v, 0.0))
+            step(ptr, h)
+
+    def _fix_base(self) -> bool:
+        self._base.position = (float(self._u_start[-1]), 0.0)
+        self._base.velocity = (0.0, 0.0)
+        return True
+
+    def _advance(self, n: int) -> None:
+        # pymunk has no multi-step call. Space.step wraps cpSpaceStep in Python
+        # bookkeeping (deferred adds/removes, post-step callbacks) that this scene
+        # never uses and that triples the per-step cost of a small scene, so the
+        # C function is called directly when pymunk exposes it.
+        step, dt = self._step, self._dt
+        if self._space_ptr is not None:
+            ptr = self._space_ptr
+            for _ in itertools.repeat(None, n):
+                step(ptr, dt)
+        else:
+            for _ in itertools.repeat(None, n):
+                step(dt)
+
+    def _read_poses(self) -> np.ndarray:
+        p = self._poses
+        if self._body_ptrs:
+            # C getters: Body.position builds a Vec2d, 10× the cost of the read
+            from pymunk._chipmunk import lib
+
+            get_pos, get_angle = lib.cpBodyGetPosition, lib.cpBodyGetAngle
+            for i, bp in enumerate(self._body_ptrs):
+                v = get_pos(bp)
+                half = -0.5 * get_angle(bp)  # θ/2 with θ = −angle
+                p[i, 0] = v.x
+                p[i, 2] = v.y
+                p[i, 3] = math.cos(half)
+                p[i, 5] = math.sin(half)
+            return p
+        for i, body in enumerate(self._blocks):  # pragma: no cover - other pymunk layouts
+            x, z = body.position
+            half = -0.5 * body.angle
+            p[i, 0], p[i, 2], p[i, 3], p[i, 5] = x, z, math.cos(half), math.sin(half)
+        return p
+
+    def _teardown(self) -> None:
+        self._space = None
+        self._space_ptr = self._step = None
+        self._body_ptrs = []
+        self._base = None
+        self._blocks = []

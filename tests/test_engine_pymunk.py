@@ -1,0 +1,203 @@
+"""Physics tests of the pymunk engine plugin against the Housner reference."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+pymunk = pytest.importorskip("pymunk")
+
+from rockbench.analytic.housner import single_block_reference  # noqa: E402
+from rockbench.engines.pymunk_engine import PymunkEngine, PymunkSettings  # noqa: E402
+from rockbench.engines.settings import SettingsError  # noqa: E402
+from rockbench.scenarios import Block, Contact, Scenario, SinePulse, Stack  # noqa: E402
+from rockbench.trajectory import Status  # noqa: E402
+
+B0 = Block(1.0, 0.2, 5.0, mass=1.0)
+B2 = Block(0.5, 0.2, 1.0, mass=1.0)
+SINGLE2 = Block(0.17, 0.502, 1.0, density=2670.0)
+PAPER_STACK = Stack((Block(0.20, 0.40, 0.60, density=2670.0, chamfer=0.005),
+                     Block(0.15, 0.55, 0.60, density=2670.0, chamfer=0.005)))
+
+
+# ---------------------------------------------------------------- reference
+def reference_theta(sc: Scenario) -> np.ndarray:
+    """θ of the project's Housner reference at the scenario's output times."""
+    tr = single_block_reference(sc)
+    return np.interp(sc.output_times(), tr.t, tr.theta[:, 0])
+
+
+def zero_crossings(t: np.ndarray, th: np.ndarray) -> np.ndarray:
+    s = np.sign(th)
+    i = np.nonzero(s[:-1] * s[1:] < 0)[0]
+    return t[i] - th[i] * (t[i + 1] - t[i]) / (th[i + 1] - th[i])
+
+
+def free(block: Block, tilt: float, duration: float, **kw) -> Scenario:
+    return Scenario("free", block, Contact(1.0, 0.0), initial_tilt=tilt, duration=duration,
+                    output_rate=1000.0, **kw)
+
+
+def test_reference_matches_published_b0_numbers() -> None:
+    sc = free(B0, 0.5, 3.5)
+    th = reference_theta(sc)
+    zc = zero_crossings(sc.output_times(), th)
+    np.testing.assert_allclose(zc[:3], [0.7761248546, 2.1263229608, 3.3271341884], rtol=1e-5)
+
+
+# ---------------------------------------------------------------- free rocking
+def test_b2_free_rocking_accurate() -> None:
+    sc = free(B2, 0.5, 6.0)
+    tr = PymunkEngine().simulate(sc, "accurate")
+    assert tr.status is Status.OK
+    ref = reference_theta(sc)
+    lam = sc.critical_angle
+    err = np.max(np.abs(tr.theta[:, 0] - ref)) / lam
+    assert err <= 5e-3, err
+    zc, zr = zero_crossings(tr.t, tr.theta[:, 0]), zero_crossings(tr.t, ref)
+    np.testing.assert_allclose(zc[:3], zr[:3], rtol=5e-3)
+    # 2D engine: no wobble, y = 0 implied, θ starts at the requested tilt
+    assert np.all(tr.wobble == 0.0)
+    assert tr.theta[0, 0] == pytest.approx(sc.theta0, rel=1e-12)
+
+
+def test_b0_free_rocking_fast_preset() -> None:
+    sc = free(B0, 0.5, 6.0)
+    tr = PymunkEngine().simulate(sc, "fast")
+    assert tr.status is Status.OK
+    err = np.max(np.abs(tr.theta[:, 0] - reference_theta(sc))) / sc.critical_angle
+    assert err <= 0.05, err
+    assert tr.settings["effective_timestep"] == pytest.approx(1e-3)
+
+
+def test_sign_convention_and_mirror_symmetry() -> None:
+    """θ > 0 pivots on the +x edge (centroid moves toward +x); −tilt mirrors it."""
+    pos = PymunkEngine().simulate(free(B2, 0.5, 0.4), "fast")
+    neg = PymunkEngine().simulate(free(B2, -0.5, 0.4), "fast")
+    assert pos.theta[0, 0] > 0 and pos.x[0, 0] > 0
+    np.testing.assert_allclose(neg.theta, -pos.theta, atol=1e-9)
+    np.testing.assert_allclose(neg.x, -pos.x, atol=1e-9)
+    np.testing.assert_allclose(neg.z, pos.z, atol=1e-9)
+
+
+# ---------------------------------------------------------------- forced rocking
+def test_single_pulse_peak_within_2_percent() -> None:
+    sc = Scenario("pulse", SINGLE2, Contact(1.0, 0.0), SinePulse(5.0, 0.006), duration=1.2,
+                  output_rate=1000.0)
+    tr = PymunkEngine().simulate(sc, "accurate")
+    assert tr.status is Status.OK
+    ref = reference_theta(sc)
+    peak, peak_ref = np.max(np.abs(tr.theta[:, 0])), np.max(np.abs(ref))
+    assert peak == pytest.approx(peak_ref, rel=0.02)
+    # a positive base acceleration tips the block to θ < 0 first
+    first = tr.theta[np.nonzero(np.abs(tr.theta[:, 0]) > 1e-3)[0][0], 0]
+    assert first < 0
+    # the base really moves and carries the block along (it ends displaced by 2πA)
+    assert np.max(tr.x[:, 0]) > 0.8 * 2 * math.pi * 0.006
+
+
+def test_frictionless_base_slides_under_block() -> None:
+    """Friction comes from the scenario: with μ = 0 the moving base cannot drag the block."""
+    sc = Scenario("slide", SINGLE2, Contact(0.0, 0.0), SinePulse(3.0, 0.004), duration=0.5,
+                  output_rate=1000.0)
+    tr = PymunkEngine().simulate(sc, "fast")
+    assert tr.status is Status.OK
+    assert np.max(np.abs(tr.x[:, 0])) < 1e-5  # the base travels 2πA = 25 mm
+    assert np.max(np.abs(tr.theta[:, 0])) < 1e-5
+
+
+# ---------------------------------------------------------------- stacks
+def test_two_block_stack_at_rest_stays_at_rest() -> None:
+    sc = Scenario("rest", PAPER_STACK, Contact(1.0, 0.0), duration=2.0, output_rate=1000.0)
+    tr = PymunkEngine().simulate(sc, "accurate")
+    assert tr.status is Status.OK
+    assert np.max(np.abs(tr.theta)) < 1e-6
+    np.testing.assert_allclose(tr.x, 0.0, atol=1e-6)
+    np.testing.assert_allclose(tr.z, tr.z[0] + 0.0 * tr.z, atol=1e-5)
+    np.testing.assert_allclose(tr.z[0], PAPER_STACK.centroids[:, 1], atol=1e-9)
+
+
+def test_stack_rocks_under_strong_pulse() -> None:
+    sc = Scenario("stack", PAPER_STACK, Contact(1.0, 0.0), SinePulse(5.0, 0.006), duration=1.0,
+                  output_rate=1000.0)
+    tr = PymunkEngine().simulate(sc, "fast")
+    assert tr.status is Status.OK
+    peaks = np.max(np.abs(tr.theta), axis=0) / sc.critical_angle
+    assert np.all(peaks > 0.05) and np.all(peaks < 1.0)
+
+
+# ---------------------------------------------------------------- settings
+def test_knob_overrides_take_effect() -> None:
+    sc = free(B2, 0.5, 1.5)
+    a = PymunkEngine().simulate(sc, "accurate")
+    b = PymunkEngine().simulate(sc, {"preset": "accurate", "timestep": "1e-3"})
+    assert a.settings["effective_timestep"] == pytest.approx(1e-4)
+    assert b.settings["timestep"] == 1e-3
+    assert np.max(np.abs(a.theta - b.theta)) > 1e-5
+    # the other knobs reach the space too
+    for knob, value in (("collision_slop", 0.01), ("collision_bias", 0.5)):
+        c = PymunkEngine().simulate(sc, {knob: value})
+        assert c.settings[knob] == value
+        assert np.max(np.abs(a.theta - c.theta)) > 1e-6, knob
+
+
+def test_non_dividing_timestep_is_used_as_given() -> None:
+    sc = free(B2, 0.5, 0.3)
+    tr = PymunkEngine().simulate(sc, {"timestep": 3e-4})
+    assert tr.status is Status.OK
+    assert tr.settings["effective_timestep"] == pytest.approx(3e-4)
+    ref = PymunkEngine().simulate(sc, "accurate")
+    assert np.max(np.abs(tr.theta - ref.theta)) / sc.critical_angle < 0.05
+
+
+def test_fast_driven_loop_equals_generic_loop() -> None:
+    """The tight _advance_driven loop is exactly _drive_base + _advance(1) per step."""
+    sc = Scenario("pulse", SINGLE2, Contact(1.0, 0.0), SinePulse(5.0, 0.006), duration=0.3,
+                  output_rate=1000.0)
+
+    class Generic(PymunkEngine):
+        def _advance_driven(self, t0: float, n: int, dt: float) -> None:
+            for j in range(n):
+                self._drive_base(t0 + j * dt, dt)
+                self._advance(1)
+
+    a = PymunkEngine().simulate(sc, "fast")
+    b = Generic().simulate(sc, "fast")
+    np.testing.assert_array_equal(a.theta, b.theta)
+    np.testing.assert_array_equal(a.x, b.x)
+
+
+def test_settings_and_presets() -> None:
+    s = PymunkEngine.settings()
+    assert isinstance(s, PymunkSettings)
+    assert s == PymunkEngine.settings("accurate")
+    assert s.collision_slop == 0.0
+    assert PymunkEngine.settings("fast").timestep == 1e-3
+    assert PymunkEngine.settings(None, iterations="30").iterations == 30
+    with pytest.raises(SettingsError):
+        PymunkEngine.settings(None, iterations=0)
+    with pytest.raises(SettingsError):
+        PymunkEngine.settings(None, substeps=3)
+    assert PymunkEngine.version() == pymunk.version
+    assert PymunkEngine.capabilities.dimensions == 2
+
+
+# ---------------------------------------------------------------- support
+@dataclass(frozen=True)
+class _OffsetBlock(Block):
+    """A block with a (hypothetical) out-of-plane field the adapter does not know."""
+
+    offset_y: float = 0.0
+
+
+def test_unknown_out_of_plane_content_is_unsupported() -> None:
+    odd = _OffsetBlock(0.5, 0.2, 1.0, mass=1.0, offset_y=0.1)
+    tr = PymunkEngine().simulate(free(odd, 0.5, 0.1))
+    assert tr.status is Status.UNSUPPORTED
+    assert "2D" in tr.message and "offset_y" in tr.message
+    # the same field at its planar (zero) value is fine
+    ok = _OffsetBlock(0.5, 0.2, 1.0, mass=1.0)
+    assert PymunkEngine().simulate(free(ok, 0.5, 0.1), "fast").status is Status.OK
