@@ -12,7 +12,16 @@ from rockbench.engines.testing import conformance_checks
 from rockbench.errors import EngineUnavailable
 
 #: (engine, check) -> measured reason. Keep in step with the README's engine table.
-KNOWN_FAILURES: dict[tuple[str, str], str] = {}
+KNOWN_FAILURES: dict[tuple[str, str], str] = {
+    # DEM penalty contacts under-dissipate at impacts, as the paper reports for 3DEC;
+    # measured with benchmarks/calibrate_dem2d.py (accurate preset, N = 5 sub-contacts)
+    ("dem2d", "free_rocking"): "DEM under-dissipates at impacts: impacts 2-3 are +24 %/+41 % "
+                               "late on B2 (limit 2 %)",
+    ("dem2d", "forced_peak"): "DEM: +24 % peak on the 3 Hz/8 mm pulse (compliance at "
+                              "k_n = 1e9 N/m3 plus under-dissipation at the first impact)",
+    ("dem2d", "subthreshold"): "DEM soft contact: 0.067 lambda rotation at 0.8 x the uplift "
+                               "threshold (elastic-foundation rocking; passes at k_n = 1e11)",
+}
 
 
 def _cases():

@@ -1,0 +1,308 @@
+"""Compiled inner loop of the ``dem2d`` engine (Distinct Element Method, planar rigid blocks).
+
+The functions are plain Python over NumPy arrays and scalars; when numba is
+installed they are compiled with :func:`numba.njit` (``cache=True``, so the
+compilation of a few seconds is paid once per machine, not once per process).
+Without numba the very same code runs interpreted: identical results, about
+three orders of magnitude slower (``HAVE_NUMBA`` tells which).
+
+Model (one time step, 3DEC's cycle in two dimensions, x–z plane)
+-----------------------------------------------------------------
+Bodies are convex polygons; body ``nbody − 1`` is the kinematic base. For each
+candidate pair (i, j) of bodies the contact is the pair of edges (a of i, b of
+j) that face each other and are closest to anti-parallel (within 45°) with a
+non-empty overlap: the part of edge b onto which edge a projects, bounded by
+the vertices of either edge (so the overlap ends are the vertices that act as
+rocking pivots). ``nsub`` sub-contacts are spread over the overlap, ends
+included, with trapezoidal tributary lengths times the contact depth (the
+smaller out-of-plane depth of the two bodies) as areas. At each sub-contact
+the gap g along b's outward normal n (negative: overlap) gives
+
+* normal force  F_n = max(0, −k_n A g − β k_n A v_n)   (no tension),
+* shear force   F_s += −k_s A v_t Δt, |F_s| ≤ μ F_n (Mohr–Coulomb, no cohesion),
+  plus the dashpot −β k_s A v_t while it sticks,
+
+with v_n, v_t the relative velocity of the two bodies' material points there.
+A sub-contact that opens forgets its shear force; so does a contact whose edge
+pair changes. Forces act at the mid-point of the overlap on both bodies
+(action = reaction, angular momentum conserved). Motion: central differences,
+v(t + Δt/2) = v(t − Δt/2) + a(t) Δt, x(t + Δt) = x(t) + v(t + Δt/2) Δt; the
+contact forces at t use positions at t and velocities at t − Δt/2 (so that
+the shear increment is exactly the relative displacement over the last step).
+
+Sign conventions: θ is the rotation about +y (top toward +x positive); a
+body vector (r_x, r_z) is (r_x c + r_z s, −r_x s + r_z c) in the world; the
+velocity of a point at arm r is ω (r_z, −r_x) and a force F at r gives the
+moment r_z F_x − r_x F_z.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+try:  # numba is an optional extra: rockbench[dem]
+    from numba import njit
+
+    HAVE_NUMBA = True
+except ImportError:  # pragma: no cover - depends on the environment
+    HAVE_NUMBA = False
+
+    def njit(*args, **kwargs):  # type: ignore[no-redef]
+        """Identity decorator standing in for numba.njit."""
+        if len(args) == 1 and callable(args[0]) and not kwargs:
+            return args[0]
+        return lambda f: f
+
+
+__all__ = ["HAVE_NUMBA", "advance", "world_geometry"]
+
+#: Edges closer than this to anti-parallel may form a contact (cos 45°).
+_COS_MAX = math.cos(math.radians(45.0)) - 1e-9
+
+
+@njit(cache=True)
+def world_geometry(pos: np.ndarray, lverts: np.ndarray, lnorm: np.ndarray, nverts: np.ndarray,
+                   wverts: np.ndarray, wnorm: np.ndarray) -> None:
+    """World vertices and outward edge normals of every body (in place)."""
+    for b in range(pos.shape[0]):
+        c = math.cos(pos[b, 2])
+        s = math.sin(pos[b, 2])
+        for k in range(nverts[b]):
+            rx = lverts[b, k, 0]
+            rz = lverts[b, k, 1]
+            wverts[b, k, 0] = pos[b, 0] + rx * c + rz * s
+            wverts[b, k, 1] = pos[b, 1] - rx * s + rz * c
+            nx = lnorm[b, k, 0]
+            nz = lnorm[b, k, 1]
+            wnorm[b, k, 0] = nx * c + nz * s
+            wnorm[b, k, 1] = -nx * s + nz * c
+
+
+@njit(cache=True)
+def _select_edges(i: int, j: int, pos: np.ndarray, wverts: np.ndarray, wnorm: np.ndarray,
+                  nverts: np.ndarray, out: np.ndarray) -> int:
+    """Best facing edge pair (a of i, b of j) with overlap and some penetration.
+
+    Returns a·KMAX + b (−1 if none) and writes the overlap [s_lo, s_hi] along
+    edge b's tangent into ``out[0:2]``.
+    """
+    best = -1
+    best_dot = 2.0
+    best_gap = math.inf
+    kmax = wverts.shape[1]
+    cix = pos[i, 0]
+    ciz = pos[i, 1]
+    cjx = pos[j, 0]
+    cjz = pos[j, 1]
+    for a in range(nverts[i]):
+        nax = wnorm[i, a, 0]
+        naz = wnorm[i, a, 1]
+        a0x = wverts[i, a, 0]
+        a0z = wverts[i, a, 1]
+        a1 = a + 1 if a + 1 < nverts[i] else 0
+        a1x = wverts[i, a1, 0]
+        a1z = wverts[i, a1, 1]
+        # j's centroid must lie in front of edge a
+        if (cjx - a0x) * nax + (cjz - a0z) * naz <= 0.0:
+            continue
+        for b in range(nverts[j]):
+            nbx = wnorm[j, b, 0]
+            nbz = wnorm[j, b, 1]
+            d = nax * nbx + naz * nbz
+            if d > -_COS_MAX or d > best_dot + 1e-12:
+                continue
+            b0x = wverts[j, b, 0]
+            b0z = wverts[j, b, 1]
+            if (cix - b0x) * nbx + (ciz - b0z) * nbz <= 0.0:
+                continue
+            b1 = b + 1 if b + 1 < nverts[j] else 0
+            tx = wverts[j, b1, 0] - b0x
+            tz = wverts[j, b1, 1] - b0z
+            lb = math.sqrt(tx * tx + tz * tz)
+            tx /= lb
+            tz /= lb
+            sa0 = (a0x - b0x) * tx + (a0z - b0z) * tz
+            sa1 = (a1x - b0x) * tx + (a1z - b0z) * tz
+            s_lo = max(min(sa0, sa1), 0.0)
+            s_hi = min(max(sa0, sa1), lb)
+            if s_hi <= s_lo:
+                continue
+            # gaps at the overlap ends (linear in between): along n_b to edge a's line
+            inv = 1.0 / d
+            g_lo = ((a0x - b0x - s_lo * tx) * nax + (a0z - b0z - s_lo * tz) * naz) * inv
+            g_hi = ((a0x - b0x - s_hi * tx) * nax + (a0z - b0z - s_hi * tz) * naz) * inv
+            gmin = min(g_lo, g_hi)
+            if gmin >= 0.0:
+                continue
+            if d < best_dot - 1e-12 or gmin < best_gap:
+                best = a * kmax + b
+                best_dot = d
+                best_gap = gmin
+                out[0] = s_lo
+                out[1] = s_hi
+    return best
+
+
+@njit(cache=True)
+def _contact_forces(pos: np.ndarray, vel: np.ndarray, wverts: np.ndarray, wnorm: np.ndarray,
+                    nverts: np.ndarray, radius: np.ndarray, pairs: np.ndarray,
+                    pair_depth: np.ndarray, pair_edges: np.ndarray, shear: np.ndarray,
+                    kn: float, ks: float, mu: float, beta: float, dt: float,
+                    force: np.ndarray, scratch: np.ndarray) -> None:
+    """Add every contact's force and moment to ``force`` (n_bodies, 3)."""
+    kmax = wverts.shape[1]
+    nsub = shear.shape[1]
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        dx = pos[i, 0] - pos[j, 0]
+        dz = pos[i, 1] - pos[j, 1]
+        rr = radius[i] + radius[j]
+        sel = -1
+        if dx * dx + dz * dz <= rr * rr:
+            sel = _select_edges(i, j, pos, wverts, wnorm, nverts, scratch)
+        if sel < 0:
+            pair_edges[p] = -1
+            for k in range(nsub):
+                shear[p, k] = 0.0
+            continue
+        if sel != pair_edges[p]:  # another pair of faces: shear history does not carry over
+            pair_edges[p] = sel
+            for k in range(nsub):
+                shear[p, k] = 0.0
+        a = sel // kmax
+        b = sel - a * kmax
+        nax = wnorm[i, a, 0]
+        naz = wnorm[i, a, 1]
+        nx = wnorm[j, b, 0]
+        nz = wnorm[j, b, 1]
+        b0x = wverts[j, b, 0]
+        b0z = wverts[j, b, 1]
+        # tangent of edge b (counter-clockwise polygons: t = (−n_z, n_x))
+        tx = -nz
+        tz = nx
+        a0x = wverts[i, a, 0]
+        a0z = wverts[i, a, 1]
+        inv = 1.0 / (nax * nx + naz * nz)
+        s_lo = scratch[0]
+        s_hi = scratch[1]
+        h = (s_hi - s_lo) / (nsub - 1)
+        area_unit = h * pair_depth[p]
+        for k in range(nsub):
+            s = s_lo + k * h
+            px = b0x + s * tx
+            pz = b0z + s * tz
+            g = ((a0x - px) * nax + (a0z - pz) * naz) * inv
+            if g >= 0.0:  # open: zero tension, shear history lost
+                shear[p, k] = 0.0
+                continue
+            area = area_unit * (0.5 if (k == 0 or k == nsub - 1) else 1.0)
+            # contact point: middle of the overlap along n_b
+            mx = px + 0.5 * g * nx
+            mz = pz + 0.5 * g * nz
+            rix = mx - pos[i, 0]
+            riz = mz - pos[i, 1]
+            rjx = mx - pos[j, 0]
+            rjz = mz - pos[j, 1]
+            vx = (vel[i, 0] + vel[i, 2] * riz) - (vel[j, 0] + vel[j, 2] * rjz)
+            vz = (vel[i, 1] - vel[i, 2] * rix) - (vel[j, 1] - vel[j, 2] * rjx)
+            vn = vx * nx + vz * nz
+            vt = vx * tx + vz * tz
+            kna = kn * area
+            fn_spring = -kna * g
+            fn = fn_spring - beta * kna * vn
+            if fn < 0.0:
+                fn = 0.0
+            ksa = ks * area
+            fs = shear[p, k] - ksa * vt * dt
+            limit = mu * fn_spring
+            if abs(fs) >= limit:  # Mohr–Coulomb slip (no cohesion)
+                fs = math.copysign(limit, fs)
+                shear[p, k] = fs
+            else:
+                shear[p, k] = fs
+                fs = fs - beta * ksa * vt
+                if abs(fs) > mu * fn:
+                    fs = math.copysign(mu * fn, fs)
+            fx = fn * nx + fs * tx
+            fz = fn * nz + fs * tz
+            force[i, 0] += fx
+            force[i, 1] += fz
+            force[i, 2] += riz * fx - rix * fz
+            force[j, 0] -= fx
+            force[j, 1] -= fz
+            force[j, 2] -= rjz * fx - rjx * fz
+
+
+@njit(cache=True)
+def advance(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarray,
+            inv_i: np.ndarray, lverts: np.ndarray, lnorm: np.ndarray, nverts: np.ndarray,
+            radius: np.ndarray, pairs: np.ndarray, pair_depth: np.ndarray,
+            pair_edges: np.ndarray, shear: np.ndarray, kn: float, ks: float, mu: float,
+            beta: float, g: float, base_u: np.ndarray) -> None:
+    """Take ``n`` central-difference steps (state arrays updated in place).
+
+    Parameters
+    ----------
+    n : int
+        Number of steps.
+    dt : float
+        Time step (s).
+    pos, vel : ndarray (n_bodies, 3)
+        (x, z, θ) at the current step and (v_x, v_z, ω) at the previous half
+        step; the last body is the base.
+    inv_m, inv_i : ndarray (n_bodies,)
+        Inverse mass and inverse moment of inertia about +y (0 for the base).
+    lverts, lnorm : ndarray (n_bodies, KMAX, 2)
+        Body-frame vertices (counter-clockwise) and outward normals of edge k
+        (from vertex k to k + 1).
+    nverts : ndarray (n_bodies,)
+        Vertex count of each body.
+    radius : ndarray (n_bodies,)
+        Bounding radius about the centroid (broad phase).
+    pairs : ndarray (n_pairs, 2)
+        Candidate body pairs (i, j), the upper/moving body first.
+    pair_depth : ndarray (n_pairs,)
+        Out-of-plane contact depth (m) of each pair.
+    pair_edges, shear : ndarray (n_pairs,), (n_pairs, nsub)
+        Contact state: selected edge pair code and elastic shear force of each
+        sub-contact.
+    kn, ks : float
+        Normal and shear stiffness per unit area (N/m³).
+    mu : float
+        Friction coefficient.
+    beta : float
+        Stiffness-proportional damping coefficient (s).
+    g : float
+        Gravity (m/s², along −z).
+    base_u : ndarray
+        Base displacement at the start of each of the ``n`` steps; empty: the
+        base holds its position with zero velocity.
+    """
+    nbody = pos.shape[0]
+    base = nbody - 1
+    kmax = lverts.shape[1]
+    wverts = np.empty((nbody, kmax, 2))
+    wnorm = np.empty((nbody, kmax, 2))
+    force = np.empty((nbody, 3))
+    scratch = np.empty(2)
+    driven = base_u.shape[0] > 0
+    if not driven:
+        vel[base, 0] = 0.0
+    for step in range(n):
+        if driven:  # base at u(t_k); its velocity over the last step, as the blocks'
+            vel[base, 0] = (base_u[step] - pos[base, 0]) / dt
+            pos[base, 0] = base_u[step]
+        world_geometry(pos, lverts, lnorm, nverts, wverts, wnorm)
+        force[:, :] = 0.0
+        _contact_forces(pos, vel, wverts, wnorm, nverts, radius, pairs, pair_depth,
+                        pair_edges, shear, kn, ks, mu, beta, dt, force, scratch)
+        for b in range(base):
+            vel[b, 0] += force[b, 0] * inv_m[b] * dt
+            vel[b, 1] += (force[b, 1] * inv_m[b] - g) * dt
+            vel[b, 2] += force[b, 2] * inv_i[b] * dt
+            pos[b, 0] += vel[b, 0] * dt
+            pos[b, 1] += vel[b, 1] * dt
+            pos[b, 2] += vel[b, 2] * dt
