@@ -31,6 +31,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "sweep": ("rockbench.report.sweep_command", "settings grids: accuracy vs cost, stability"),
     "tune": ("rockbench.report.sweep_command", "find the cheapest settings meeting a target"),
     "history": ("rockbench.report.matrix_command", "metrics of a cell across stored runs"),
+    "spectrum": ("rockbench.report.spectrum_command",
+                 "overturning spectra: min overturning acceleration vs pulse frequency"),
 }
 
 
@@ -194,8 +196,11 @@ def _execute_scenarios(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------------- run
 def _configure_run(p: argparse.ArgumentParser) -> None:
+    from rockbench.presets import add_settings_file_argument
+
     p.add_argument("scenario", help="catalog name or scenario .toml file")
     add_engine_arguments(p, default="analytic")
+    add_settings_file_argument(p)
     p.add_argument("--out", "-o", default=None, metavar="FILE",
                    help="write trajectories (.csv or .npz, + .json sidecar); with several "
                         "engines the engine name is appended to the file stem")
@@ -218,12 +223,13 @@ def _execute_run(args: argparse.Namespace) -> int:
 
     from rockbench import analytic, metrics
     from rockbench.engines import resolve_engine_names
+    from rockbench.presets import settings_with_file
     from rockbench.runner import Job, run_jobs
     from rockbench.scenarios import get_scenario, scenario_to_dict
 
     scenario = get_scenario(args.scenario)
     engines = resolve_engine_names(args.engine)
-    settings = engine_settings(args, engines)
+    settings = settings_with_file(args, engines)
     if args.out:
         for e in engines:
             _out_path(args.out, e, len(engines) > 1)

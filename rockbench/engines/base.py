@@ -45,6 +45,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from rockbench.bounds import SpeedWatch
 from rockbench.engines.settings import EngineSettings, SettingsError
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import Scenario
@@ -327,6 +328,7 @@ class _Watchdog:
         # the contact penetration noise of a soft engine
         self.z_limit = mgz0 + 0.02 * abs(mgz0 - mgz_up) + 1e-4 * self.masses.sum() * height
         self.chunk = max(1, int(self.PERIOD * scenario.output_rate))
+        self.speed = SpeedWatch(scenario)
 
     def check(self, poses: np.ndarray, t: np.ndarray) -> tuple[int, tuple[Status, str]] | None:
         """First failing sample of a chunk (index within the chunk, verdict), or None."""
@@ -341,6 +343,9 @@ class _Watchdog:
                 bad.setdefault(int(np.argmax(far)),
                                (Status.UNSTABLE, "explosion: a block left the scene"))
             theta, _ = angles_from_quaternions(poses[..., 3:])
+            fast = self.speed.check_chunk(t, poses[:, :, [0, 2]], theta)
+            if fast is not None:
+                bad.setdefault(fast[0], (Status.UNSTABLE, fast[1]))
             over = np.abs(theta) >= 0.5 * math.pi
             if over.any():
                 j = int(np.argmax(over.any(axis=1)))

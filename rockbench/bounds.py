@@ -1,0 +1,236 @@
+"""Physical speed bounds of a scenario: flag runs that move faster than physics allows.
+
+A rocking stack can only gain kinetic energy from gravity and from the base. A
+point of the stack that falls the whole stack height ``H`` reaches at most
+``sqrt(2 g H)``; the base drags the blocks at most at its peak speed. So no
+block centroid can move faster than::
+
+    v_max = factor · (sqrt(2 g H) + 2 max|u̇_g|) + v_floor
+
+and no block can spin faster than ``ω_max = v_max / k_min`` (``k_min`` the
+smallest centroidal radius of gyration about y: a block whose rotational energy
+½ m k² ω² exceeded ½ m v_max² would violate the same energy bound).
+
+The check uses finite differences of sampled poses, i.e. mean speeds over a
+sample interval, which never exceed the peak speed: an honest trajectory can
+not trip it. It is used by :func:`rockbench.runner.run_job` on every finished
+trajectory (:func:`check_trajectory`) and is meant for the engine watchdog
+(:class:`SpeedWatch`, one sample at a time).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from rockbench.scenarios import Scenario
+from rockbench.trajectory import Status, Trajectory
+
+__all__ = ["SpeedBound", "SpeedWatch", "check_trajectory", "SAFETY_FACTOR"]
+
+#: Safety factor on the energy bound (an exploding solver is orders of magnitude off).
+SAFETY_FACTOR = 3.0
+#: Additive floor in m/s so that tiny blocks keep some slack for contact noise.
+SPEED_FLOOR = 0.5
+
+
+@dataclass(frozen=True)
+class SpeedBound:
+    """Largest physically possible centroid speed and spin of any block.
+
+    Attributes
+    ----------
+    v_max : float
+        Bound on each block centroid's speed in the x–z plane (m/s).
+    omega_max : float
+        Bound on each block's rocking rate |dθ/dt| (rad/s).
+    """
+
+    v_max: float
+    omega_max: float
+
+    @classmethod
+    def for_scenario(cls, scenario: Scenario, factor: float = SAFETY_FACTOR) -> SpeedBound:
+        """The bound derived from the stack height and the peak base speed.
+
+        Parameters
+        ----------
+        scenario : Scenario
+            The simulated problem.
+        factor : float
+            Safety factor on the energy bound.
+        """
+        height = scenario.stack.total_height
+        exc = scenario.excitation
+        v_base = 0.0
+        if not exc.is_free:
+            t_end = min(scenario.duration, max(exc.end_time, 0.0))
+            t = np.linspace(0.0, t_end, 4001)
+            v_base = float(np.max(np.abs(exc.velocity(t))))
+        v_max = factor * (math.sqrt(2.0 * scenario.g * height) + 2.0 * v_base) + SPEED_FLOOR
+        k_min = min(math.sqrt(b.inertia[1] / b.m) for b in scenario.blocks)
+        return cls(v_max=v_max, omega_max=v_max / k_min)
+
+    def violation(
+        self, dt: float, dxz: np.ndarray | None, dtheta: np.ndarray
+    ) -> str | None:
+        """Describe a bound violation over one sample interval, or None.
+
+        Parameters
+        ----------
+        dt : float
+            Sample interval (s).
+        dxz : ndarray, shape (n_blocks, 2), optional
+            Centroid displacement over the interval (None or NaN: unknown).
+        dtheta : ndarray, shape (n_blocks,)
+            Change of rocking angle over the interval (rad, unwrapped).
+        """
+        if dxz is not None:
+            speed = np.hypot(dxz[:, 0], dxz[:, 1]) / dt
+            if np.any(speed > self.v_max):
+                i = int(np.nanargmax(speed))
+                return (f"explosion: block {i + 1} centroid speed {speed[i]:.3g} m/s exceeds "
+                        f"the physical bound {self.v_max:.3g} m/s")
+        spin = np.abs(dtheta) / dt
+        if np.any(spin > self.omega_max):
+            i = int(np.nanargmax(spin))
+            return (f"explosion: block {i + 1} rocking rate {spin[i]:.3g} rad/s exceeds "
+                    f"the physical bound {self.omega_max:.3g} rad/s")
+        return None
+
+
+class SpeedWatch:
+    """Speed check for an engine's watchdog, one sample or one chunk of samples at a time.
+
+    It remembers the last sample it saw, so consecutive chunks are compared
+    across their boundary.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The simulated problem (gives the bound).
+    """
+
+    def __init__(self, scenario: Scenario) -> None:
+        self.bound = SpeedBound.for_scenario(scenario)
+        self._prev: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def check_chunk(self, t: np.ndarray, xz: np.ndarray,
+                    theta: np.ndarray) -> tuple[int, str] | None:
+        """First sample of a chunk that moved faster than the bound, or None.
+
+        Parameters
+        ----------
+        t : ndarray, shape (m,)
+            Sample times (s), increasing.
+        xz : ndarray, shape (m, n_blocks, 2)
+            Centroid positions (x, z) in m.
+        theta : ndarray, shape (m, n_blocks)
+            Rocking angles in rad.
+
+        Returns
+        -------
+        (int, str) or None
+            Index of the first offending sample in the chunk and the reason
+            (without the time).
+        """
+        t = np.asarray(t, float).reshape(-1)
+        xz = np.asarray(xz, float).reshape(t.size, -1, 2)
+        theta = np.asarray(theta, float).reshape(t.size, -1)
+        if t.size == 0:
+            return None
+        prev, self._prev = self._prev, (t[-1:], xz[-1:], theta[-1:])
+        shift = 0
+        if prev is not None:
+            t, xz, theta = (np.concatenate([a, b]) for a, b in zip(prev, (t, xz, theta),
+                                                                    strict=True))
+            shift = 1
+        if t.size < 2:
+            return None
+        dt = np.diff(t)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            speed = np.hypot(*np.moveaxis(np.diff(xz, axis=0), -1, 0)) / dt[:, None]
+            spin = np.abs(np.angle(np.exp(1j * np.diff(theta, axis=0)))) / dt[:, None]
+            fast = (np.any(speed > self.bound.v_max, axis=1)
+                    | np.any(spin > self.bound.omega_max, axis=1))
+        if not fast.any():
+            return None
+        j = int(np.argmax(fast))
+        msg = self.bound.violation(float(dt[j]), xz[j + 1] - xz[j],
+                                   np.angle(np.exp(1j * (theta[j + 1] - theta[j]))))
+        return j + 1 - shift, msg or "explosion: non-physical speed"
+
+    def check(self, t: float, xz: np.ndarray, theta: np.ndarray) -> str | None:
+        """Compare one sample with the previous one; a message if the bound is broken.
+
+        Parameters
+        ----------
+        t : float
+            Sample time (s).
+        xz : ndarray, shape (n_blocks, 2)
+            Centroid positions (x, z) in m.
+        theta : ndarray, shape (n_blocks,)
+            Rocking angles in rad.
+        """
+        bad = self.check_chunk(np.array([t]), np.asarray(xz)[None], np.asarray(theta)[None])
+        return None if bad is None else f"{bad[1]} at t = {t:.4g} s"
+
+
+def check_trajectory(traj: Trajectory, scenario: Scenario) -> Trajectory:
+    """Mark a finished trajectory ``unstable`` if it holds NaN or non-physical speeds.
+
+    Only ``ok`` and ``overturned`` trajectories are checked. A failing one is
+    cut after the first offending sample (as the engine watchdog would have
+    stopped) and gets status ``unstable`` with the reason; otherwise it is
+    returned unchanged. Unknown positions (all-NaN ``x``/``z`` columns, as in
+    analytic references) are not checked.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A run's result.
+    scenario : Scenario
+        The problem it solves.
+
+    Returns
+    -------
+    Trajectory
+        ``traj`` itself or a truncated copy with status ``unstable``.
+    """
+    if not traj.status.completed or traj.t.size == 0:
+        return traj
+    bad = ~np.all(np.isfinite(traj.theta), axis=1)
+    known = np.all(np.isfinite(traj.x), axis=0) & np.all(np.isfinite(traj.z), axis=0)
+    partly = np.any(np.isfinite(traj.x), axis=0) & ~known
+    if np.any(partly):  # positions reported, then lost: NaN in the run
+        bad |= np.any(~np.isfinite(traj.x[:, partly]) | ~np.isfinite(traj.z[:, partly]), axis=1)
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        return _cut(traj, i, f"NaN or infinite pose at t = {traj.t[i]:.4g} s")
+    if traj.t.size < 2:
+        return traj
+    bound = SpeedBound.for_scenario(scenario)
+    dt = np.diff(traj.t)
+    spin = np.abs(np.diff(np.unwrap(traj.theta, axis=0), axis=0)) / dt[:, None]
+    fast = np.any(spin > bound.omega_max, axis=1)
+    if np.any(known):
+        dx = np.diff(traj.x[:, known], axis=0)
+        dz = np.diff(traj.z[:, known], axis=0)
+        fast |= np.any(np.hypot(dx, dz) / dt[:, None] > bound.v_max, axis=1)
+    if not np.any(fast):
+        return traj
+    k = int(np.argmax(fast))
+    xz = None
+    if np.all(known):
+        xz = np.column_stack([traj.x[k + 1] - traj.x[k], traj.z[k + 1] - traj.z[k]])
+    dtheta = np.diff(np.unwrap(traj.theta[k:k + 2], axis=0), axis=0)[0]
+    msg = bound.violation(float(dt[k]), xz, dtheta) or "explosion: non-physical speed"
+    return _cut(traj, k + 1, f"{msg} at t = {traj.t[k + 1]:.4g} s")
+
+
+def _cut(traj: Trajectory, i: int, message: str) -> Trajectory:
+    n = i + 1
+    return replace(traj, t=traj.t[:n], theta=traj.theta[:n], x=traj.x[:n], z=traj.z[:n],
+                   wobble=traj.wobble[:n], status=Status.UNSTABLE, message=message)

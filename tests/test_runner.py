@@ -1,0 +1,183 @@
+"""Fault isolation: every injected fault becomes a status with a reason; the parent carries on."""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rockbench.bounds import SpeedBound, SpeedWatch, check_trajectory
+from rockbench.engines import SettingsError, register, unregister
+from rockbench.errors import RockbenchError
+from rockbench.runner import Job, default_jobs, run_job, run_job_subprocess, run_jobs
+from rockbench.scenarios import Block, Free, Scenario, SinePulse
+from rockbench.trajectory import Status, Trajectory
+
+sys.path.insert(0, str(Path(__file__).parent))
+fault_engine = importlib.import_module("fault_engine")
+
+SCENARIO = Scenario("tiny-free", Block(0.2, 0.2, 0.8, mass=1.0), initial_tilt=0.3,
+                    duration=0.3, output_rate=200.0)
+
+#: fault → (status, words expected in the message)
+EXPECTED = {
+    "none": (Status.OK, ""),
+    "exception": (Status.CRASHED, "RuntimeError: injected fault"),
+    "segfault": (Status.CRASHED, "SIGSEGV"),
+    "abort": (Status.CRASHED, "SIGABRT"),
+    "exit": (Status.CRASHED, "exit code 3"),
+    "hang": (Status.TIMEOUT, "killed after the 2 s limit"),
+    "nan": (Status.UNSTABLE, "NaN"),
+    "explode": (Status.UNSTABLE, "left the scene"),
+    "speed": (Status.UNSTABLE, "exceeds the physical bound"),
+    "energy": (Status.UNSTABLE, "energy gain"),
+}
+
+
+@pytest.fixture(autouse=True)
+def fault() -> object:
+    register("fault", fault_engine.FaultEngine)
+    yield
+    unregister("fault")
+
+
+def test_every_fault_becomes_a_status_and_the_parent_carries_on() -> None:
+    jobs = [Job(SCENARIO, "fault", {"fault": f}) for f in EXPECTED]
+    seen: list[str] = []
+    start = time.perf_counter()
+    trajs = run_jobs(jobs, n_jobs=2, timeout=2.0,
+                     on_result=lambda job, traj: seen.append(job.settings["fault"]))
+    assert time.perf_counter() - start < 20
+    assert sorted(seen) == sorted(EXPECTED)  # reported as each finished
+    for job, traj in zip(jobs, trajs, strict=True):
+        status, words = EXPECTED[job.settings["fault"]]
+        assert traj.status is status, (job.settings, traj.message)
+        assert words in traj.message
+        assert traj.engine == "fault"
+        assert traj.n_blocks == 1
+
+
+def test_unstable_trajectories_keep_samples_up_to_the_fault() -> None:
+    traj = run_jobs([Job(SCENARIO, "fault", {"fault": "nan", "at": 0.1})], timeout=10)[0]
+    assert traj.status is Status.UNSTABLE
+    assert 0.09 < traj.t[-1] < 0.13
+
+
+def test_bad_settings_are_bad_input_not_a_crash() -> None:
+    with pytest.raises(SettingsError):
+        run_jobs([Job(SCENARIO, "fault", {"fault": "bogus"})], timeout=10)
+    with pytest.raises(SettingsError):
+        run_job(Job(SCENARIO, "fault", {"no_such_knob": 1}))
+
+
+def test_unknown_engine_crosses_the_process_boundary() -> None:
+    with pytest.raises(RockbenchError, match="unknown engine"):
+        run_jobs([Job(SCENARIO, "nosuchengine")], timeout=10)
+
+
+def test_in_process_run_and_default_jobs() -> None:
+    traj = run_jobs([Job(SCENARIO, "fault")], isolate=False)[0]
+    assert traj.status is Status.OK and traj.t.size == 61
+    assert default_jobs() >= 1
+    with pytest.raises(RockbenchError, match="executor"):
+        run_jobs([Job(SCENARIO, "fault")], executor="threads")
+
+
+def test_subprocess_isolation_ships_runtime_registrations() -> None:
+    spec = "fault_engine:FaultEngine"
+    assert run_job_subprocess(Job(SCENARIO, "fault", {"fault": "segfault"}), 20,
+                              spec).status is Status.CRASHED
+    traj = run_job_subprocess(Job(SCENARIO, "fault", {"fault": "hang"}), 1.5, spec)
+    assert traj.status is Status.TIMEOUT
+    with pytest.raises(RockbenchError, match="fault must be one of"):
+        run_job_subprocess(Job(SCENARIO, "fault", {"fault": "bogus"}), 20, spec)
+
+
+# ---------------------------------------------------------------------- physical bounds
+def test_speed_bound_from_the_scenario() -> None:
+    b = SpeedBound.for_scenario(SCENARIO)
+    assert b.v_max == pytest.approx(3 * np.sqrt(2 * 9.81 * 0.8) + 0.5)
+    k = np.sqrt((0.2**2 + 0.8**2) / 12)
+    assert b.omega_max == pytest.approx(b.v_max / k)
+    moving = SCENARIO.replace(excitation=SinePulse(frequency=2.0, amplitude=0.05))
+    v_base = 0.05 * 2 * np.pi * 2.0 * 2  # peak of Aω(1 − cos ωt)
+    assert SpeedBound.for_scenario(moving).v_max == pytest.approx(b.v_max + 3 * 2 * v_base,
+                                                                  rel=1e-3)
+
+
+def _traj(x: np.ndarray, theta: np.ndarray) -> Trajectory:
+    t = np.arange(x.size) / 100.0
+    return Trajectory(t=t, theta=theta, x=x, z=np.full(x.size, 0.4))
+
+
+def test_check_trajectory_flags_and_cuts() -> None:
+    n = 50
+    calm = _traj(np.zeros(n), np.linspace(0, 0.1, n))
+    assert check_trajectory(calm, SCENARIO) is calm
+    x = np.zeros(n)
+    x[20:] = 1.0  # 1 m in 10 ms = 100 m/s
+    bad = check_trajectory(_traj(x, np.zeros(n)), SCENARIO)
+    assert bad.status is Status.UNSTABLE and "centroid speed" in bad.message
+    assert bad.t.size == 21
+    th = np.zeros(n)
+    th[30:] = 1.4  # 1.4 rad in 10 ms
+    spin = check_trajectory(_traj(np.zeros(n), th), SCENARIO)
+    assert spin.status is Status.UNSTABLE and "rocking rate" in spin.message
+    th = np.zeros(n)
+    th[10] = np.nan
+    assert "NaN" in check_trajectory(_traj(np.zeros(n), th), SCENARIO).message
+    analytic_like = Trajectory(t=np.arange(n) / 100.0, theta=np.zeros(n))  # x unknown
+    assert check_trajectory(analytic_like, SCENARIO) is analytic_like
+    failed = Trajectory.failed(Status.CRASHED, "x")
+    assert check_trajectory(failed, SCENARIO) is failed
+
+
+def test_speed_watch_sample_by_sample() -> None:
+    watch = SpeedWatch(SCENARIO)
+    xz = np.array([[0.0, 0.4]])
+    assert watch.check(0.0, xz, np.zeros(1)) is None
+    assert watch.check(0.01, xz + [[0.01, 0.0]], np.zeros(1)) is None
+    msg = watch.check(0.02, xz + [[1.0, 0.0]], np.zeros(1))
+    assert msg is not None and "t = 0.02" in msg
+
+
+# ---------------------------------------------------------------------- Dask
+def test_dask_local_cluster_runs_the_same_isolated_jobs() -> None:
+    distributed = pytest.importorskip("distributed")
+    scenario = SCENARIO.replace(excitation=Free())
+    jobs = [Job(scenario, "fault", {"fault": f}) for f in ("none", "exception", "segfault",
+                                                           "hang")]
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        seen = []
+        trajs = run_jobs(jobs, executor="dask", scheduler=client,
+                         timeout=lambda job: 3.0 if job.settings["fault"] == "hang" else 60.0,
+                         on_result=lambda j, t: seen.append(j.settings["fault"]))
+        # the address form, as given by --scheduler
+        again = run_jobs(jobs[:1], executor="dask", scheduler=cluster.scheduler_address,
+                         timeout=20.0)
+    assert [t.status for t in trajs] == [Status.OK, Status.CRASHED, Status.CRASHED,
+                                        Status.TIMEOUT]
+    assert "SIGSEGV" in trajs[2].message
+    assert sorted(seen) == sorted(j.settings["fault"] for j in jobs)
+    assert again[0].status is Status.OK
+
+
+def test_speed_watch_in_chunks() -> None:
+    watch = SpeedWatch(SCENARIO)
+    t = np.arange(10) / 100.0
+    xz = np.zeros((10, 1, 2))
+    xz[..., 1] = 0.4
+    theta = np.zeros((10, 1))
+    assert watch.check_chunk(t[:5], xz[:5], theta[:5]) is None
+    xz[5:, 0, 0] = 0.5  # jump across the chunk boundary: 0.5 m in 10 ms
+    bad = watch.check_chunk(t[5:], xz[5:], theta[5:])
+    assert bad is not None and bad[0] == 0 and "centroid speed" in bad[1]
+    theta[8:] = 1.0
+    bad = SpeedWatch(SCENARIO).check_chunk(t, np.zeros((10, 1, 2)), theta)
+    assert bad is not None and bad[0] == 8 and "rocking rate" in bad[1]
