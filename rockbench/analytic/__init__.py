@@ -14,6 +14,11 @@ from rockbench.analytic.closed_forms import (
     quarter_period,
 )
 from rockbench.analytic.housner import SingleBlockSolution, single_block_reference, solve_single
+from rockbench.analytic.overturning import (
+    minimum_overturning_acceleration,
+    pulse_outcome,
+    scan_column,
+)
 from rockbench.analytic.twoblock import (
     BlockParams,
     TwoBlockSolution,
@@ -28,7 +33,8 @@ __all__ = [
     "reference", "has_reference", "solve_single", "single_block_reference",
     "SingleBlockSolution", "solve_two_blocks", "two_block_reference", "BlockParams",
     "TwoBlockSolution", "free_period", "quarter_period", "amplitude_after_impacts",
-    "impact_velocity", "free_impact_times",
+    "impact_velocity", "free_impact_times", "pulse_outcome", "scan_column",
+    "minimum_overturning_acceleration",
 ]
 
 
@@ -37,8 +43,16 @@ def has_reference(scenario: Scenario) -> bool:
     return scenario.n_blocks <= 2 and not any(scenario.stack.offsets)
 
 
-def reference(scenario: Scenario) -> Trajectory:
+def reference(scenario: Scenario, *, linear: bool = False) -> Trajectory:
     """The analytic reference trajectory of ``scenario``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        One block, or two centred stacked blocks.
+    linear : bool
+        Single blocks only: Housner's linearised equation (sin x ≈ x, cos x ≈ 1,
+        uplift at g·λ) instead of the exact one.
 
     Raises
     ------
@@ -50,5 +64,7 @@ def reference(scenario: Scenario) -> Trajectory:
             "analytic references exist for one block or two centred stacked blocks only"
         )
     if scenario.n_blocks == 1:
-        return single_block_reference(scenario)
+        return single_block_reference(scenario, linear=linear)
+    if linear:
+        raise UnsupportedScenario("the linearised model is implemented for single blocks only")
     return two_block_reference(scenario)

@@ -27,6 +27,7 @@ __all__ = [
     "free_impact_times",
     "rectangular_pulse_min_overturn",
     "sine_pulse_linear_response",
+    "cosine_pulse_linear_response",
 ]
 
 
@@ -275,3 +276,41 @@ def sine_pulse_linear_response(
     om = p * (a * np.sinh(tau) + b * np.cosh(tau)) + k * omega_p * np.cos(omega_p * t)
     before = t < ts
     return np.where(before, 0.0, th), np.where(before, 0.0, om)
+
+
+def cosine_pulse_linear_response(
+    p: float, lam: float, a_p: float, omega_p: float, g: float, t: float | np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Linearised response to a one-cosine pulse ``ü_g = a_p cos(ω_p t)``, before the first impact.
+
+    With ``|a_p| > g λ`` rocking starts at t = 0 on the side ``s = −sgn a_p``;
+    afterwards ``θ = s λ − s C cos ω_p t − s (λ − C) cosh p t`` with
+    ``C = (|a_p|/g) p²/(p² + ω_p²)`` (θ(0) = θ̇(0) = 0). Valid while ``s θ > 0``
+    and ``t ≤ 2π/ω_p``.
+
+    Parameters
+    ----------
+    p, lam : float
+        Frequency parameter (rad/s) and critical angle (rad).
+    a_p : float
+        Pulse amplitude (m/s², signed), ``|a_p| > g λ``.
+    omega_p : float
+        Pulse circular frequency (rad/s).
+    g : float
+        Gravity (m/s²).
+    t : float or ndarray
+        Times (s), ≥ 0.
+
+    Returns
+    -------
+    theta, theta_dot : ndarray
+        Rotation (rad) and rate (rad/s).
+    """
+    if abs(a_p) <= g * lam:
+        raise ValueError("|a_p| must exceed g*lam for the linearised block to uplift at t = 0")
+    t = np.asarray(t, dtype=float)
+    s = -math.copysign(1.0, a_p)
+    c = abs(a_p) / g * p * p / (p * p + omega_p * omega_p)
+    th = s * (lam - c * np.cos(omega_p * t) - (lam - c) * np.cosh(p * t))
+    om = s * (c * omega_p * np.sin(omega_p * t) - p * (lam - c) * np.sinh(p * t))
+    return th, om

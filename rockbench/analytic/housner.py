@@ -61,6 +61,7 @@ from scipy.special import ellipj, ellipkinc
 import rockbench
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import (
+    CosinePulse,
     Excitation,
     Free,
     Record,
@@ -417,6 +418,12 @@ def _scalar_candidate(exc: Excitation) -> Callable[[float], float] | None:
         def pulse(t: float) -> float:
             return amp * math.sin(w * t) if 0.0 <= t <= t_end else 0.0
         return pulse
+    if isinstance(exc, CosinePulse):
+        amp, w, t_end = exc.amplitude * exc.omega**2, exc.omega, exc.end_time
+
+        def cos_pulse(t: float) -> float:
+            return amp * math.cos(w * t) if 0.0 <= t <= t_end else 0.0
+        return cos_pulse
     if isinstance(exc, Sinusoid):
         amp, w, tr, t_end = exc.amplitude, exc.omega, exc.ramp_time, exc.end_time
         has_end = exc.duration is not None

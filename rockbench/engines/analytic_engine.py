@@ -26,7 +26,15 @@ __all__ = ["AnalyticEngine", "AnalyticSettings"]
 
 @dataclass(frozen=True)
 class AnalyticSettings(EngineSettings):
-    """The analytic reference has no knobs: its tolerances are fixed (rtol 1e-10)."""
+    """Knobs of the analytic reference (its tolerances are fixed: rtol 1e-10).
+
+    Attributes
+    ----------
+    linear : bool
+        Housner's linearised equation for single blocks (slender-block theory).
+    """
+
+    linear: bool = False
 
 
 class AnalyticEngine(Engine):
@@ -36,6 +44,7 @@ class AnalyticEngine(Engine):
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=2, max_blocks=2,
                                                         analytic=True)
     Settings: ClassVar[type[EngineSettings]] = AnalyticSettings
+    presets: ClassVar[dict] = {"accurate": {}, "fast": {}, "linear": {"linear": True}}
 
     @classmethod
     def version(cls) -> str:
@@ -48,8 +57,8 @@ class AnalyticEngine(Engine):
             )
 
     def simulate(self, scenario: Scenario, settings: Any = None) -> Trajectory:  # noqa: D102
-        self.resolve_settings(settings)
-        meta = dict(engine=self.name, engine_version=self.version(), settings={},
+        s = self.resolve_settings(settings)
+        meta = dict(engine=self.name, engine_version=self.version(), settings=s.to_dict(),
                     scenario=scenario.name)
         try:
             self.check_supported(scenario)
@@ -57,8 +66,13 @@ class AnalyticEngine(Engine):
             return Trajectory.failed(Status.UNSUPPORTED, str(exc), n_blocks=scenario.n_blocks,
                                      **meta)
         start = time.perf_counter()
-        traj = analytic.reference(scenario)
+        try:
+            traj = analytic.reference(scenario, linear=s.linear)
+        except UnsupportedScenario as exc:
+            return Trajectory.failed(Status.UNSUPPORTED, str(exc), n_blocks=scenario.n_blocks,
+                                     **meta)
         traj.engine, traj.engine_version = self.name, self.version()
+        traj.settings = {**traj.settings, **meta["settings"]}
         traj.wall_time = time.perf_counter() - start
         return traj
 

@@ -2,6 +2,7 @@
 
 from rockbench.scenarios.excitation import (
     STANDARD_GRAVITY,
+    CosinePulse,
     Excitation,
     Free,
     Record,
@@ -12,7 +13,7 @@ from rockbench.scenarios.model import Block, Contact, RockingProperties, Scenari
 
 __all__ = [
     "Block", "Stack", "Contact", "Scenario", "RockingProperties",
-    "Excitation", "Free", "SinePulse", "Sinusoid", "Record", "STANDARD_GRAVITY",
+    "Excitation", "Free", "SinePulse", "CosinePulse", "Sinusoid", "Record", "STANDARD_GRAVITY",
 ]
 from rockbench.scenarios.catalog import (  # noqa: E402
     catalog,

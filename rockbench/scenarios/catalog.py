@@ -13,6 +13,7 @@ from rockbench.errors import UnknownScenario
 from rockbench.scenarios.excitation import SinePulse, Sinusoid
 from rockbench.scenarios.files import load_scenario
 from rockbench.scenarios.model import Block, Contact, Scenario, Stack
+from rockbench.scenarios.records import record_scenarios
 
 __all__ = ["catalog", "get_scenario", "suites", "get_suite", "resolve_scenarios",
            "FREE_BLOCKS", "SINGLE_CASES", "STACK_CASES"]
@@ -81,7 +82,7 @@ def _build() -> dict[str, Callable[[], Scenario]]:
     return cat
 
 
-_CATALOG = _build()
+_CATALOG = {**_build(), **record_scenarios()}
 
 
 def catalog() -> list[str]:
@@ -117,6 +118,7 @@ def suites() -> dict[str, list[str]]:
         "paper-stack-sine": [n for n in names if n.startswith("stack-sine-")],
     }
     groups["paper"] = [n for g in groups.values() for n in g]
+    groups["records"] = [n for n in names if n.startswith("record-")]
     groups["smoke"] = ["free-b2-0.5", "single-pulse-3.0hz-8mm", "stack-pulse-4.0hz-4mm"]
     return groups
 

@@ -19,7 +19,8 @@ import numpy as np
 
 from rockbench.errors import ScenarioError
 
-__all__ = ["Excitation", "Free", "SinePulse", "Sinusoid", "Record", "STANDARD_GRAVITY"]
+__all__ = ["Excitation", "Free", "SinePulse", "CosinePulse", "Sinusoid", "Record",
+           "STANDARD_GRAVITY"]
 
 #: Conversion factor for records given in units of g.
 STANDARD_GRAVITY = 9.80665
@@ -175,6 +176,121 @@ class SinePulse(Excitation):
 
     def peak_acceleration(self, t_end: float = math.inf) -> float:
         return abs(self.amplitude) * self.omega**2
+
+    @property
+    def acceleration_amplitude(self) -> float:
+        """Signed acceleration amplitude a_p = A ω² (m/s²)."""
+        return self.amplitude * self.omega**2
+
+    @classmethod
+    def from_acceleration(cls, a_p: float, omega_p: float, cycles: int = 1) -> SinePulse:
+        """The pulse ü_g = a_p sin(ω_p t) given by its acceleration amplitude and frequency.
+
+        Parameters
+        ----------
+        a_p : float
+            Acceleration amplitude in m/s² (negative reverses the pulse).
+        omega_p : float
+            Circular frequency ω_p in rad/s (> 0).
+        cycles : int
+            Number of full cycles.
+        """
+        w = _finite_positive(omega_p, "pulse circular frequency omega_p")
+        return cls(frequency=w / (2.0 * math.pi), amplitude=float(a_p) / (w * w), cycles=cycles)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"type": self.kind, "frequency": self.frequency, "amplitude": self.amplitude,
+                "cycles": self.cycles}
+
+
+@dataclass(frozen=True)
+class CosinePulse(Excitation):
+    """One-cosine acceleration pulse ü_g = A ω² cos(ωt) for 0 ≤ t ≤ cycles/f, then 0.
+
+    The acceleration jumps to its peak at t = 0, but the base still starts from
+    rest: u̇_g = A ω sin(ωt) and u_g = A (1 − cos ωt) are the exact integrals from
+    u̇_g(0) = u_g(0) = 0. After the pulse the base stands still at its start
+    position (u̇_g = u_g = 0), unlike the one-sine pulse which displaces it.
+
+    Parameters
+    ----------
+    frequency : float
+        f in Hz (ω = 2πf).
+    amplitude : float
+        Displacement amplitude A in m; the peak acceleration is A ω² and the peak
+        displacement 2A. A negative value reverses the pulse.
+    cycles : int
+        Number of full cycles (default 1).
+    """
+
+    frequency: float
+    amplitude: float
+    cycles: int = 1
+    kind: ClassVar[str] = "cosine-pulse"
+
+    def __post_init__(self) -> None:
+        _finite_positive(self.frequency, "cosine-pulse frequency")
+        if not math.isfinite(float(self.amplitude)):
+            raise ScenarioError(f"cosine-pulse amplitude must be finite, got {self.amplitude!r}")
+        if int(self.cycles) != self.cycles or self.cycles < 1:
+            raise ScenarioError(
+                f"cosine-pulse cycles must be a positive integer, got {self.cycles!r}"
+            )
+
+    @property
+    def omega(self) -> float:
+        """Circular frequency ω = 2πf."""
+        return 2.0 * math.pi * self.frequency
+
+    @property
+    def end_time(self) -> float:
+        return self.cycles / self.frequency
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        return (self.end_time,)
+
+    def acceleration(self, t: ArrayLike) -> ArrayLike:
+        t = np.asarray(t, float)
+        w = self.omega
+        inside = (t >= 0) & (t <= self.end_time)
+        return np.where(inside, self.amplitude * w * w * np.cos(w * t), 0.0)
+
+    def velocity(self, t: ArrayLike) -> ArrayLike:
+        t = np.asarray(t, float)
+        w = self.omega
+        inside = (t >= 0) & (t <= self.end_time)
+        return np.where(inside, self.amplitude * w * np.sin(w * t), 0.0)
+
+    def displacement(self, t: ArrayLike) -> ArrayLike:
+        t = np.asarray(t, float)
+        w = self.omega
+        inside = (t >= 0) & (t <= self.end_time)
+        return np.where(inside, self.amplitude * (1.0 - np.cos(w * t)), 0.0)
+
+    def peak_acceleration(self, t_end: float = math.inf) -> float:
+        return abs(self.amplitude) * self.omega**2 if t_end >= 0 else 0.0
+
+    @property
+    def acceleration_amplitude(self) -> float:
+        """Signed acceleration amplitude a_p = A ω² (m/s²)."""
+        return self.amplitude * self.omega**2
+
+    @classmethod
+    def from_acceleration(cls, a_p: float, omega_p: float, cycles: int = 1) -> CosinePulse:
+        """The pulse ü_g = a_p cos(ω_p t) given by its acceleration amplitude and frequency.
+
+        Parameters
+        ----------
+        a_p : float
+            Acceleration amplitude in m/s² (negative reverses the pulse).
+        omega_p : float
+            Circular frequency ω_p in rad/s (> 0).
+        cycles : int
+            Number of full cycles.
+        """
+        w = _finite_positive(omega_p, "pulse circular frequency omega_p")
+        return cls(frequency=w / (2.0 * math.pi), amplitude=float(a_p) / (w * w), cycles=cycles)
 
     def to_dict(self) -> dict[str, Any]:
         return {"type": self.kind, "frequency": self.frequency, "amplitude": self.amplitude,

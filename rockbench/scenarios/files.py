@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -9,7 +10,14 @@ from typing import Any
 import tomli_w
 
 from rockbench.errors import ScenarioError
-from rockbench.scenarios.excitation import Excitation, Free, Record, SinePulse, Sinusoid
+from rockbench.scenarios.excitation import (
+    CosinePulse,
+    Excitation,
+    Free,
+    Record,
+    SinePulse,
+    Sinusoid,
+)
 from rockbench.scenarios.model import Block, Contact, Scenario, Stack
 
 if sys.version_info >= (3, 11):
@@ -26,7 +34,8 @@ _CONTACT = {"friction", "restitution", "eta"}
 _INITIAL = {"tilt", "tilt_rad"}
 _EXC = {
     "free": set(),
-    "sine-pulse": {"frequency", "amplitude", "cycles"},
+    "sine-pulse": {"frequency", "amplitude", "peak_acceleration", "cycles"},
+    "cosine-pulse": {"frequency", "amplitude", "peak_acceleration", "cycles"},
     "sinusoid": {"frequency", "amplitude", "duration", "ramp_cycles"},
     "record": {"file", "units", "scale", "times", "accelerations"},
 }
@@ -47,6 +56,30 @@ def _no_unknown(data: dict[str, Any], allowed: set[str], where: str) -> None:
         )
 
 
+def _pulse(cls: type[SinePulse] | type[CosinePulse], data: dict[str, Any],
+           kind: str) -> Excitation:
+    """A one-sine or one-cosine pulse from ``amplitude`` (m) or ``peak_acceleration`` (m/s²)."""
+    if ("amplitude" in data) == ("peak_acceleration" in data):
+        raise ScenarioError(f"[excitation] of type {kind!r} needs exactly one of 'amplitude' "
+                            f"(displacement, m) and 'peak_acceleration' (m/s², signed)")
+    if "frequency" not in data:
+        raise ScenarioError(f"[excitation] of type {kind!r} needs 'frequency' (Hz)")
+    if "peak_acceleration" in data:
+        data = dict(data)
+        a_p = data.pop("peak_acceleration")
+        try:
+            f = float(data.pop("frequency"))
+            a = float(a_p)
+        except (TypeError, ValueError):
+            raise ScenarioError(f"[excitation] of type {kind!r}: frequency and "
+                                f"peak_acceleration must be numbers") from None
+        if not (math.isfinite(f) and f > 0 and math.isfinite(a)):
+            raise ScenarioError(f"[excitation] of type {kind!r}: frequency must be finite and "
+                                f"> 0 and peak_acceleration finite, got {f!r} and {a!r}")
+        return cls.from_acceleration(a, 2.0 * math.pi * f, **data)
+    return cls(**data)
+
+
 def _excitation(data: dict[str, Any], base_dir: Path | None) -> Excitation:
     data = dict(_table(data, "[excitation]"))
     kind = data.pop("type", "free")
@@ -56,8 +89,8 @@ def _excitation(data: dict[str, Any], base_dir: Path | None) -> Excitation:
     try:
         if kind == "free":
             return Free()
-        if kind == "sine-pulse":
-            return SinePulse(**data)
+        if kind in ("sine-pulse", "cosine-pulse"):
+            return _pulse(SinePulse if kind == "sine-pulse" else CosinePulse, data, kind)
         if kind == "sinusoid":
             return Sinusoid(**data)
     except TypeError as exc:
