@@ -1,0 +1,157 @@
+"""``rockbench compare``: run a suite on engines and the analytic reference, write the report.
+
+Examples::
+
+    rockbench compare --suite paper --engine all --out report
+    rockbench compare --suite paper-sensitivity --engine mujoco,pymunk --out sens
+    rockbench compare --scenarios free-b2-0.5,my_case.toml --engine pymunk --out r --resume
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+from pathlib import Path
+
+from rockbench.cli import Progress, add_engine_arguments, engine_settings
+from rockbench.errors import RockbenchError, UnknownScenario
+
+__all__ = ["configure", "execute", "DEFAULT_PRESETS"]
+
+#: Presets run by default: see the --presets help for why both.
+DEFAULT_PRESETS = ("accurate", "fast")
+
+
+def configure(p: argparse.ArgumentParser) -> None:
+    """Add the ``compare`` options to ``p``."""
+    from rockbench.report.sensitivity import SUITE
+
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument("--suite", metavar="NAME",
+                      help="a named suite (see `rockbench scenarios`: paper, paper-free, "
+                           f"paper-single-pulse, ..., smoke) or {SUITE} (the paper's Table 2 "
+                           "study on B0 only)")
+    what.add_argument("--scenarios", metavar="A,B,C",
+                      help="comma list of catalog names, suite names and .toml scenario files")
+    add_engine_arguments(p, default="all")
+    p.add_argument("--presets", default=None, metavar="P1,P2",
+                   help="run each engine once per preset (default: "
+                        f"{','.join(DEFAULT_PRESETS)}). The fast preset costs roughly a "
+                        "third of the accurate one, so it adds about a third to the run time "
+                        "and gives every engine two points on the accuracy-versus-speed chart "
+                        "(one point per engine cannot show a trade-off). Use --presets accurate "
+                        "for tables with one column per engine, like the paper's")
+    p.add_argument("--out", "-o", required=True, metavar="DIR",
+                   help="report directory (index.html, report.md, results.csv, "
+                        "trajectories/, figures/)")
+    p.add_argument("--jobs", "-j", type=int, default=1, metavar="N",
+                   help="parallel worker processes (default 1: clean, uncontended timings)")
+    p.add_argument("--timeout", type=float, default=None, metavar="S",
+                   help="wall-time limit per run in s (default: 300 s + 60 s per simulated "
+                        "second, generous)")
+    p.add_argument("--resume", action="store_true",
+                   help="reuse runs already in DIR/trajectories with the same settings hash, "
+                        "scenario and engine version (crashed and timed-out runs are redone)")
+    p.add_argument("--sensitivity", action="store_true",
+                   help=f"also run the sensitivity study on B0 (the {SUITE} pseudo-suite)")
+    p.add_argument("--link-figures", action="store_true",
+                   help="link the PNGs in figures/ from index.html instead of embedding them")
+    p.add_argument("--no-isolate", action="store_true",
+                   help="run engines in this process (no crash/hang protection, no timeout)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar or summary")
+
+
+def _command_line(args: argparse.Namespace) -> str:
+    parts = ["rockbench", "compare"]
+    parts += ["--suite", args.suite] if args.suite else ["--scenarios", args.scenarios]
+    parts += ["--engine", args.engine]
+    if args.preset:
+        parts += ["--preset", args.preset]
+    if args.presets:
+        parts += ["--presets", args.presets]
+    for s in args.set_options:
+        parts += ["--set", s]
+    parts += ["--out", args.out]
+    if args.jobs != 1:
+        parts += ["--jobs", str(args.jobs)]
+    if args.timeout:
+        parts += ["--timeout", f"{args.timeout:g}"]
+    for flag in ("resume", "sensitivity", "link_figures", "no_isolate"):
+        if getattr(args, flag):
+            parts.append("--" + flag.replace("_", "-"))
+    return shlex.join(parts)
+
+
+def execute(args: argparse.Namespace) -> int:
+    """Run the comparison and write the report; 0 when the report is written."""
+    from rockbench.engines import engine_class, resolve_engine_names
+    from rockbench.report.compare import CompareOptions, run_comparison
+    from rockbench.report.results import REFERENCE
+    from rockbench.report.sensitivity import SUITE
+    from rockbench.scenarios import get_scenario, get_suite, resolve_scenarios, suites
+
+    sensitivity = bool(args.sensitivity)
+    if args.suite == SUITE:
+        scenarios = []
+        sensitivity = True
+    elif args.suite:
+        if args.suite not in suites():
+            raise UnknownScenario(args.suite, [*suites(), SUITE], kind="suite")
+        scenarios = [get_scenario(n) for n in get_suite(args.suite)]
+    else:
+        scenarios = resolve_scenarios(args.scenarios)
+        if not scenarios:
+            raise RockbenchError("--scenarios names no scenario")
+    if args.jobs < 1:
+        raise RockbenchError(f"--jobs must be >= 1, got {args.jobs}")
+    if args.timeout is not None and args.timeout <= 0:
+        raise RockbenchError(f"--timeout must be > 0, got {args.timeout:g}")
+    if args.preset and args.presets:
+        raise RockbenchError("give either --preset or --presets, not both")
+    if args.preset:
+        presets = [args.preset]
+    elif args.presets:
+        presets = [p.strip() for p in args.presets.split(",") if p.strip()]
+        if not presets:
+            raise RockbenchError("--presets names no preset")
+    else:
+        presets = list(DEFAULT_PRESETS)
+    engines = resolve_engine_names(args.engine)
+    ns = argparse.Namespace(**{**vars(args), "preset": None})
+    settings = engine_settings(ns, engines)
+    overrides: dict[str, dict[str, object]] = {}
+    for e in engines:
+        if e == REFERENCE:
+            continue
+        ov = dict(settings.get(e, {}))
+        if "preset" in ov:
+            raise RockbenchError(f"select presets with --presets, not --set {e}.preset")
+        cls = engine_class(e)
+        for p in presets:
+            cls.settings(p, **ov)  # unknown preset or bad knob: one line, exit 2
+        overrides[e] = ov
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise RockbenchError(f"--out {args.out!r} exists and is not a directory")
+    label = args.suite or "custom"
+    opts = CompareOptions(
+        scenarios=scenarios, engines=[e for e in engines if e != REFERENCE], out=out,
+        presets=presets, overrides=overrides, jobs=args.jobs, timeout=args.timeout,
+        resume=args.resume, sensitivity=sensitivity, isolate=not args.no_isolate,
+        suite=label, command=_command_line(args), quiet=args.quiet,
+        embed_figures=not args.link_figures)
+
+    def progress(total: int, description: str) -> Progress:
+        return Progress(total, description, quiet=args.quiet)
+
+    result = run_comparison(opts, progress=None if args.quiet else progress)
+    if not args.quiet:
+        counts: dict[str, int] = {}
+        for r in result.rows:
+            counts[r["status"]] = counts.get(r["status"], 0) + 1
+        summary = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
+        print(f"{len(result.rows)} results ({summary}); {result.ran} run, "
+              f"{result.reused} reused; {result.wall_time:.1f} s")
+        for f in result.files:
+            print(f"wrote {f}")
+    return 0
