@@ -261,37 +261,68 @@ class MujocoEngine(Engine):
         self._pose_view = self._data.qpos[: 7 * n].reshape(n, 7)
         self._poses = np.empty((n, 7))
         self._dt = float(self._model.opt.timestep)
-        self._exc = scenario.excitation
-        self._chunk_start = -1
-        if not scenario.excitation.is_free:
+        self._exc = exc = scenario.excitation
+        self._chunk_start = self._chunk_end = -1
+        self._ul: list[float] = []
+        self._vl: list[float] = []
+        self._fl: list[float] = []
+        if not exc.is_free:
             self._jq = 7 * n  # slide joint: after the n free joints
             self._jv = 6 * n
             self._mbase = float(self._model.body_mass[n + 1])
+            # steps the base loop drives at most: to the end of the motion (or of the run),
+            # then up to one output interval more (the base is fixed after the first sample
+            # past the end); short runs thus precompute only what they use
+            per_sample = max(1, math.ceil(1.0 / (scenario.output_rate * self._dt) - 1e-9))
+            t_drive = min(scenario.duration, exc.end_time)
+            self._n_drive = int(math.ceil(t_drive / self._dt)) + per_sample + 2
         mujoco.mj_forward(self._model, self._data)
         return self._dt
 
     # ------------------------------------------------------------------ drive
-    def _load_chunk(self, i0: int) -> None:
-        """Precompute base displacement, velocity and step force for steps i0…i0+_CHUNK."""
+    def _load_chunk(self, i0: int, n: int = 1) -> None:
+        """Precompute base displacement, velocity and step force for steps i0, i0 + 1, …
+
+        At least ``n`` steps, at most ``_CHUNK`` (unless ``n`` is larger), and no more
+        than the motion needs. Every value depends on its step index only, so where a
+        chunk starts does not change the trajectory.
+        """
         dt = self._dt
-        t = (i0 + np.arange(_CHUNK + 1)) * dt
+        size = max(n, min(_CHUNK, self._n_drive - i0))
+        t = (i0 + np.arange(size + 1)) * dt
         v = self._exc.velocity(t)
         self._u = np.asarray(self._exc.displacement(t), float)
         self._v = np.asarray(v, float)
         # the force that takes the base from v(t) to v(t + dt) in one (semi-implicit) step
         self._f = self._mbase * np.diff(self._v) / dt
-        self._chunk_start = i0
+        # plain floats for the stepping loops (cheaper to index and assign than NumPy scalars)
+        self._ul, self._vl, self._fl = self._u.tolist(), self._v.tolist(), self._f.tolist()
+        self._chunk_start, self._chunk_end = i0, i0 + size
 
     def _drive_base(self, t: float, dt: float) -> None:
         i = int(round(t / self._dt))
-        j = i - self._chunk_start
-        if self._chunk_start < 0 or j >= _CHUNK or j < 0:
+        if not self._chunk_start <= i < self._chunk_end:
             self._load_chunk(i)
-            j = 0
+        j = i - self._chunk_start
         d = self._data
-        d.qpos[self._jq] = self._u[j]
-        d.qvel[self._jv] = self._v[j]
-        d.qfrc_applied[self._jv] = self._f[j]
+        d.qpos[self._jq] = self._ul[j]
+        d.qvel[self._jv] = self._vl[j]
+        d.qfrc_applied[self._jv] = self._fl[j]
+
+    def _advance_driven(self, t0: float, n: int, dt: float) -> None:
+        # the same as _drive_base + _advance(1) per step, in one loop over local names
+        i0 = int(round(t0 / self._dt))
+        if not (0 <= self._chunk_start <= i0 and i0 + n <= self._chunk_end):
+            self._load_chunk(i0, n)
+        a = i0 - self._chunk_start
+        m, d, step = self._model, self._data, self._step
+        qpos, qvel, qfrc, jq, jv = d.qpos, d.qvel, d.qfrc_applied, self._jq, self._jv
+        for u, v, f in zip(self._ul[a:a + n], self._vl[a:a + n], self._fl[a:a + n],
+                           strict=True):
+            qpos[jq] = u
+            qvel[jv] = v
+            qfrc[jv] = f
+            step(m, d)
 
     def _fix_base(self) -> bool:
         m, d = self._model, self._data
@@ -313,3 +344,4 @@ class MujocoEngine(Engine):
         self._model = None
         self._data = None
         self._pose_view = None
+        self._ul, self._vl, self._fl = [], [], []

@@ -58,7 +58,8 @@ GROUP_TITLES: dict[str, str] = {
 def scenario_group(scenario: Scenario) -> str:
     """Group of a scenario: ``free``, ``single-pulse``, ``stack-sine``, ``stack3-pulse`` ..."""
     exc = scenario.excitation
-    kind = ("free" if isinstance(exc, Free) else "pulse" if isinstance(exc, (SinePulse, CosinePulse))
+    kind = ("free" if isinstance(exc, Free)
+            else "pulse" if isinstance(exc, (SinePulse, CosinePulse))
             else "sine" if isinstance(exc, Sinusoid) else "record")
     nb = scenario.n_blocks
     prefix = "single" if nb == 1 else "stack" if nb == 2 else f"stack{nb}"
