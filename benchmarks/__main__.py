@@ -29,10 +29,7 @@ def _summary(data: dict) -> list[str]:
     if ov:
         per: dict[str, list[str]] = {}
         for r in ov:
-            txt = f"{100 * r['overhead']:+.0f} %"
-            if "proposed_overhead" in r:
-                txt += f" (proposed {100 * r['proposed_overhead']:+.0f} %)"
-            per.setdefault(r["engine"], []).append(txt)
+            per.setdefault(r["engine"], []).append(f"{100 * r['overhead']:+.0f} %")
         rows.append("| adapter overhead ≤ 10 % (free B0 / forced single) | "
                     + "; ".join(f"{e} {' / '.join(v)}" for e, v in per.items()) + " |")
     an = data.get("analytic", {})

@@ -142,9 +142,17 @@ class PymunkEngine(Engine):
         self._step: Any = None
         self._space_ptr: Any = None
         self._body_ptrs: list[Any] = []
+        self._base_ptr: Any = None
+        # Chipmunk's C functions, bound once per build (see _build)
+        self._set_pos: Any = None
+        self._set_vel: Any = None
+        self._get_pos: Any = None
+        self._get_angle: Any = None
         self._poses = np.zeros((0, 7))
         self._v_mid = np.zeros(1)
         self._u_start = np.zeros(1)
+        self._u_list: list[float] = []
+        self._v_list: list[float] = []
 
     @classmethod
     def version(cls) -> str:
@@ -201,6 +209,8 @@ class PymunkEngine(Engine):
             u_start = v_mid = np.zeros(1)
             u_max = 0.0
         self._u_start, self._v_mid = u_start, v_mid
+        # plain floats for the stepping loop (cheaper to slice and pass than NumPy scalars)
+        self._u_list, self._v_list = u_start.tolist(), v_mid.tolist()
 
         # base: wide enough for any toppled block plus the base travel, and
         # thick enough that nothing tunnels through it
@@ -228,11 +238,14 @@ class PymunkEngine(Engine):
             blocks.append(body)
 
         self._space, self._base, self._blocks, self._dt = space, base, blocks, dt
-        try:  # the C step function and the space pointer behind pymunk's Space.step
+        try:  # the C functions and pointers behind pymunk's Space.step and Body properties
             from pymunk._chipmunk import lib
 
             self._step, self._space_ptr = lib.cpSpaceStep, space._space
             self._body_ptrs = [body._body for body in blocks]
+            self._base_ptr = base._body
+            self._set_pos, self._set_vel = lib.cpBodySetPosition, lib.cpBodySetVelocity
+            self._get_pos, self._get_angle = lib.cpBodyGetPosition, lib.cpBodyGetAngle
         except (ImportError, AttributeError):  # pragma: no cover - other pymunk layouts
             self._step, self._space_ptr, self._body_ptrs = space.step, None, []
         self._poses = np.zeros((len(blocks), 7))
@@ -249,16 +262,15 @@ class PymunkEngine(Engine):
         if self._space_ptr is None:  # pragma: no cover - other pymunk layouts
             super()._advance_driven(t0, n, dt)
             return
-        from pymunk._chipmunk import lib
-
-        set_pos, set_vel, bptr = lib.cpBodySetPosition, lib.cpBodySetVelocity, self._base._body
+        set_pos, set_vel, bptr = self._set_pos, self._set_vel, self._base_ptr
         step, ptr, h = self._step, self._space_ptr, self._dt
         i0 = int(round(t0 / h))
-        last = self._v_mid.size - 1
-        # this call's slice as plain floats (cheaper to index than numpy scalars);
-        # steps past the precomputed motion repeat its last, still, value
-        idx = np.minimum(np.arange(i0, i0 + n), last)
-        for u, v in zip(self._u_start[idx].tolist(), self._v_mid[idx].tolist(), strict=True):
+        if i0 + n <= len(self._v_list):
+            us, vs = self._u_list[i0:i0 + n], self._v_list[i0:i0 + n]
+        else:  # steps past the precomputed motion repeat its last, still, value
+            idx = np.minimum(np.arange(i0, i0 + n), self._v_mid.size - 1)
+            us, vs = self._u_start[idx].tolist(), self._v_mid[idx].tolist()
+        for u, v in zip(us, vs, strict=True):
             set_pos(bptr, (u, 0.0))
             set_vel(bptr, (v, 0.0))
             step(ptr, h)
@@ -286,16 +298,11 @@ class PymunkEngine(Engine):
         p = self._poses
         if self._body_ptrs:
             # C getters: Body.position builds a Vec2d, 10× the cost of the read
-            from pymunk._chipmunk import lib
-
-            get_pos, get_angle = lib.cpBodyGetPosition, lib.cpBodyGetAngle
+            get_pos, get_angle, cos, sin = self._get_pos, self._get_angle, math.cos, math.sin
             for i, bp in enumerate(self._body_ptrs):
                 v = get_pos(bp)
                 half = -0.5 * get_angle(bp)  # θ/2 with θ = −angle
-                p[i, 0] = v.x
-                p[i, 2] = v.y
-                p[i, 3] = math.cos(half)
-                p[i, 5] = math.sin(half)
+                p[i, 0], p[i, 2], p[i, 3], p[i, 5] = v.x, v.y, cos(half), sin(half)
             return p
         for i, body in enumerate(self._blocks):  # pragma: no cover - other pymunk layouts
             x, z = body.position
@@ -307,5 +314,7 @@ class PymunkEngine(Engine):
         self._space = None
         self._space_ptr = self._step = None
         self._body_ptrs = []
-        self._base = None
+        self._base = self._base_ptr = None
+        self._set_pos = self._set_vel = self._get_pos = self._get_angle = None
+        self._u_list, self._v_list = [], []
         self._blocks = []
