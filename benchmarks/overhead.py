@@ -36,30 +36,6 @@ GOAL = 0.10
 
 # ---------------------------------------------------------------------- studied, not adopted
 # Kept for study but not run: it changed the dem2d trajectory (0.2 λ).
-def _proposed_dem2d() -> type:
-    from rockbench.engines import dem2d_engine as de
-    from rockbench.engines import dem2d_kernels as K
-
-    class ProposedDem2d(de.Dem2dEngine):
-        """dem2d plugin whose ``_advance_driven`` reads base positions from a chunked buffer.
-
-        The plugin evaluates ``excitation.displacement`` on a k-element array for every
-        output sample (~20 µs of NumPy per call); its own ``_advance`` already keeps a
-        buffer of ``_BASE_CHUNK`` steps, which this reuses.
-        """
-
-        def _advance_driven(self, t0: float, n: int, dt: float) -> None:
-            k0 = int(round(t0 / dt))
-            if not (self._buf_start <= k0 and k0 + n <= self._buf_start + self._buf.size):
-                self._buf_start = k0
-                self._buf = self._base_positions(k0, max(n, de._BASE_CHUNK))
-            i = k0 - self._buf_start
-            K.advance(n, self._dt, *self._args, self._buf[i:i + n])
-
-    return ProposedDem2d
-
-
-# ---------------------------------------------------------------------- cases
 def cases(quick: bool) -> list[tuple[str, Scenario]]:
     """(label, scenario) pairs: B0 free rocking and a forced single block."""
     free_d, forced_d = (1.0, 0.5) if quick else (2.0, 1.0)
