@@ -30,12 +30,7 @@ Measured pitfalls this module works around (see docs/engine-notes.md):
 
 from __future__ import annotations
 
-import contextlib
-import ctypes
 import math
-import os
-import sys
-from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
@@ -46,30 +41,8 @@ from rockbench.engines.settings import EngineSettings
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import Scenario
 
-
-@contextlib.contextmanager
-def _quiet_stdout() -> Iterator[None]:
-    """Silence C-level writes to stdout (pybullet prints a build-time banner).
-
-    rockbench's stdout carries tables and file names; a banner there would
-    corrupt piped output.
-    """
-    sys.stdout.flush()
-    libc = ctypes.CDLL(None)
-    saved = os.dup(1)
-    try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 1)
-            yield
-            libc.fflush(None)  # the banner may still sit in C's stdio buffer
-    finally:
-        os.dup2(saved, 1)
-        os.close(saved)
-
-
 try:  # the registry reports a missing library as "unavailable"
-    with _quiet_stdout():
-        import pybullet as _pb
+    import pybullet as _pb
 except ImportError as _exc:  # pragma: no cover - exercised only without pybullet
     raise ImportError(f"pybullet is not installed ({_exc})") from _exc
 
@@ -233,8 +206,7 @@ class BulletEngine(Engine):
             dt = s.dt
         self._dt = dt
         pb = _pb
-        with _quiet_stdout():
-            cid = pb.connect(pb.DIRECT)
+        cid = pb.connect(pb.DIRECT)
         self._cid = cid
         kw = {"physicsClientId": cid}
         self._kw = kw
