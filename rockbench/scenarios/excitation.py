@@ -110,33 +110,25 @@ class Free(Excitation):
 
 
 @dataclass(frozen=True)
-class SinePulse(Excitation):
-    """One-sine acceleration pulse ü_g = A ω² sin(ωt) for 0 ≤ t ≤ cycles/f, then 0.
+class _Pulse(Excitation):
+    """Shared part of the one-sine and one-cosine acceleration pulses.
 
-    Parameters
-    ----------
-    frequency : float
-        f in Hz (ω = 2πf).
-    amplitude : float
-        Displacement amplitude A in m; the peak acceleration is A ω².
-        A negative value reverses the pulse.
-    cycles : int
-        Number of full cycles (default 1). The base ends at rest, displaced by
-        2π·cycles·A.
+    Subclasses give the shape through :meth:`acceleration`, :meth:`velocity`
+    and :meth:`displacement`; this class holds the fields, validation, timing and
+    the (a_p, ω_p) form used by overturning studies.
     """
 
     frequency: float
     amplitude: float
     cycles: int = 1
-    kind: ClassVar[str] = "sine-pulse"
 
     def __post_init__(self) -> None:
-        _finite_positive(self.frequency, "sine-pulse frequency")
+        _finite_positive(self.frequency, f"{self.kind} frequency")
         if not math.isfinite(float(self.amplitude)):
-            raise ScenarioError(f"sine-pulse amplitude must be finite, got {self.amplitude!r}")
+            raise ScenarioError(f"{self.kind} amplitude must be finite, got {self.amplitude!r}")
         if int(self.cycles) != self.cycles or self.cycles < 1:
             raise ScenarioError(
-                f"sine-pulse cycles must be a positive integer, got {self.cycles!r}"
+                f"{self.kind} cycles must be a positive integer, got {self.cycles!r}"
             )
 
     @property
@@ -152,30 +144,11 @@ class SinePulse(Excitation):
     def breakpoints(self) -> tuple[float, ...]:
         return (self.end_time,)
 
-    def _clip(self, t: ArrayLike) -> np.ndarray:
-        return np.clip(np.asarray(t, float), 0.0, self.end_time)
-
-    def acceleration(self, t: ArrayLike) -> ArrayLike:
-        t = np.asarray(t, float)
-        w = self.omega
-        inside = (t >= 0) & (t <= self.end_time)
-        return np.where(inside, self.amplitude * w * w * np.sin(w * t), 0.0)
-
-    def velocity(self, t: ArrayLike) -> ArrayLike:
-        tc = self._clip(t)
-        w = self.omega
-        return self.amplitude * w * (1.0 - np.cos(w * tc))
-
-    def displacement(self, t: ArrayLike) -> ArrayLike:
-        t = np.asarray(t, float)
-        tc = self._clip(t)
-        w = self.omega
-        u = self.amplitude * (w * tc - np.sin(w * tc))
-        # after the pulse the base is at rest (velocity 0), so u stays constant
-        return np.where(t < 0, 0.0, u)
+    def _inside(self, t: np.ndarray) -> np.ndarray:
+        return (t >= 0) & (t <= self.end_time)
 
     def peak_acceleration(self, t_end: float = math.inf) -> float:
-        return abs(self.amplitude) * self.omega**2
+        return abs(self.amplitude) * self.omega**2 if t_end >= 0 else 0.0
 
     @property
     def acceleration_amplitude(self) -> float:
@@ -183,8 +156,8 @@ class SinePulse(Excitation):
         return self.amplitude * self.omega**2
 
     @classmethod
-    def from_acceleration(cls, a_p: float, omega_p: float, cycles: int = 1) -> SinePulse:
-        """The pulse ü_g = a_p sin(ω_p t) given by its acceleration amplitude and frequency.
+    def from_acceleration(cls, a_p: float, omega_p: float, cycles: int = 1) -> _Pulse:
+        """The pulse given by its acceleration amplitude a_p and circular frequency ω_p.
 
         Parameters
         ----------
@@ -204,7 +177,45 @@ class SinePulse(Excitation):
 
 
 @dataclass(frozen=True)
-class CosinePulse(Excitation):
+class SinePulse(_Pulse):
+    """One-sine acceleration pulse ü_g = A ω² sin(ωt) for 0 ≤ t ≤ cycles/f, then 0.
+
+    u̇_g = Aω(1 − cos ωt), u_g = A(ωt − sin ωt); after the pulse the base stands
+    still, displaced by 2π·cycles·A.
+
+    Parameters
+    ----------
+    frequency : float
+        f in Hz (ω = 2πf).
+    amplitude : float
+        Displacement amplitude A in m; the peak acceleration is A ω².
+        A negative value reverses the pulse.
+    cycles : int
+        Number of full cycles (default 1).
+    """
+
+    kind: ClassVar[str] = "sine-pulse"
+
+    def acceleration(self, t: ArrayLike) -> ArrayLike:
+        t = np.asarray(t, float)
+        w = self.omega
+        return np.where(self._inside(t), self.amplitude * w * w * np.sin(w * t), 0.0)
+
+    def velocity(self, t: ArrayLike) -> ArrayLike:
+        tc = np.clip(np.asarray(t, float), 0.0, self.end_time)
+        w = self.omega
+        return self.amplitude * w * (1.0 - np.cos(w * tc))
+
+    def displacement(self, t: ArrayLike) -> ArrayLike:
+        t = np.asarray(t, float)
+        tc = np.clip(t, 0.0, self.end_time)
+        w = self.omega
+        # after the pulse the base is at rest (velocity 0), so u stays constant
+        return np.where(t < 0, 0.0, self.amplitude * (w * tc - np.sin(w * tc)))
+
+
+@dataclass(frozen=True)
+class CosinePulse(_Pulse):
     """One-cosine acceleration pulse ü_g = A ω² cos(ωt) for 0 ≤ t ≤ cycles/f, then 0.
 
     The acceleration jumps to its peak at t = 0, but the base still starts from
@@ -223,78 +234,22 @@ class CosinePulse(Excitation):
         Number of full cycles (default 1).
     """
 
-    frequency: float
-    amplitude: float
-    cycles: int = 1
     kind: ClassVar[str] = "cosine-pulse"
-
-    def __post_init__(self) -> None:
-        _finite_positive(self.frequency, "cosine-pulse frequency")
-        if not math.isfinite(float(self.amplitude)):
-            raise ScenarioError(f"cosine-pulse amplitude must be finite, got {self.amplitude!r}")
-        if int(self.cycles) != self.cycles or self.cycles < 1:
-            raise ScenarioError(
-                f"cosine-pulse cycles must be a positive integer, got {self.cycles!r}"
-            )
-
-    @property
-    def omega(self) -> float:
-        """Circular frequency ω = 2πf."""
-        return 2.0 * math.pi * self.frequency
-
-    @property
-    def end_time(self) -> float:
-        return self.cycles / self.frequency
-
-    @property
-    def breakpoints(self) -> tuple[float, ...]:
-        return (self.end_time,)
 
     def acceleration(self, t: ArrayLike) -> ArrayLike:
         t = np.asarray(t, float)
         w = self.omega
-        inside = (t >= 0) & (t <= self.end_time)
-        return np.where(inside, self.amplitude * w * w * np.cos(w * t), 0.0)
+        return np.where(self._inside(t), self.amplitude * w * w * np.cos(w * t), 0.0)
 
     def velocity(self, t: ArrayLike) -> ArrayLike:
         t = np.asarray(t, float)
         w = self.omega
-        inside = (t >= 0) & (t <= self.end_time)
-        return np.where(inside, self.amplitude * w * np.sin(w * t), 0.0)
+        return np.where(self._inside(t), self.amplitude * w * np.sin(w * t), 0.0)
 
     def displacement(self, t: ArrayLike) -> ArrayLike:
         t = np.asarray(t, float)
         w = self.omega
-        inside = (t >= 0) & (t <= self.end_time)
-        return np.where(inside, self.amplitude * (1.0 - np.cos(w * t)), 0.0)
-
-    def peak_acceleration(self, t_end: float = math.inf) -> float:
-        return abs(self.amplitude) * self.omega**2 if t_end >= 0 else 0.0
-
-    @property
-    def acceleration_amplitude(self) -> float:
-        """Signed acceleration amplitude a_p = A ω² (m/s²)."""
-        return self.amplitude * self.omega**2
-
-    @classmethod
-    def from_acceleration(cls, a_p: float, omega_p: float, cycles: int = 1) -> CosinePulse:
-        """The pulse ü_g = a_p cos(ω_p t) given by its acceleration amplitude and frequency.
-
-        Parameters
-        ----------
-        a_p : float
-            Acceleration amplitude in m/s² (negative reverses the pulse).
-        omega_p : float
-            Circular frequency ω_p in rad/s (> 0).
-        cycles : int
-            Number of full cycles.
-        """
-        w = _finite_positive(omega_p, "pulse circular frequency omega_p")
-        return cls(frequency=w / (2.0 * math.pi), amplitude=float(a_p) / (w * w), cycles=cycles)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"type": self.kind, "frequency": self.frequency, "amplitude": self.amplitude,
-                "cycles": self.cycles}
+        return np.where(self._inside(t), self.amplitude * (1.0 - np.cos(w * t)), 0.0)
 
 
 @dataclass(frozen=True)
