@@ -393,3 +393,92 @@ def test_fast_scalar_excitations_match_the_excitation_objects():
     assert a.impacts.size > 5
     np.testing.assert_allclose(a.theta, b.theta, atol=1e-12)
     np.testing.assert_allclose(a.impacts, b.impacts, atol=1e-12)
+
+
+# ---------------------------------------------------------------- built-in DOP853
+
+
+@pytest.mark.parametrize("name", ["single-pulse-3.0hz-8mm", "single-sine-5.0hz-5mm"])
+def test_builtin_integrator_matches_solve_ivp(name):
+    """The scalar DOP853 of the forced phases is SciPy's algorithm: same answer to rounding."""
+    from rockbench.scenarios import get_scenario
+
+    sc = get_scenario(name)
+    a = single_block_reference(sc)  # integrator="builtin" (default)
+    b = single_block_reference(sc, integrator="scipy")
+    assert a.settings == b.settings and a.status is b.status is Status.OK
+    assert a.impacts.size == b.impacts.size > 5
+    np.testing.assert_allclose(a.theta, b.theta, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(a.impacts, b.impacts, rtol=0, atol=1e-8)
+    assert a.extra["uplift_times"] == pytest.approx(b.extra["uplift_times"], abs=1e-8)
+
+
+@pytest.mark.parametrize("case", ["overturn", "linear", "free-ode", "tilted"])
+def test_builtin_integrator_matches_solve_ivp_on_every_path(rock, case):
+    """Overturning event, linear model, ODE free phases, a start off θ = 0."""
+    exc, end = sine(1.3 * G * math.tan(rock.lam), 2 * math.pi)
+    kw = dict(g=G, accel=exc, end_time=end, breakpoints=(end,), t_out=np.linspace(0, 6, 3001))
+    if case == "overturn":
+        exc, end = sine(5.0 * G * math.tan(rock.lam), 2 * math.pi)
+        kw.update(accel=exc, end_time=end, breakpoints=(end,))
+    elif case == "linear":
+        kw.update(linear=True)
+    elif case == "free-ode":
+        kw.update(free_closed_form=False)
+    else:
+        kw.update(theta0=0.3 * rock.lam)
+    a = solve_single(rock, **kw)
+    b = solve_single(rock, integrator="scipy", **kw)
+    assert a.status == b.status == ("overturned" if case == "overturn" else "ok")
+    assert a.t.size == b.t.size and a.impacts.size == b.impacts.size
+    assert case == "overturn" or a.impacts.size > 3
+    np.testing.assert_allclose(a.theta, b.theta, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(a.theta_dot, b.theta_dot, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(a.impacts, b.impacts, rtol=0, atol=1e-8)
+    if case == "overturn":
+        assert a.overturn_time == pytest.approx(b.overturn_time, abs=1e-8)
+
+
+def test_builtin_integrator_tables_and_steps_are_scipys():
+    """The copied DOP853 coefficients, and step sequence / dense output against solve_ivp."""
+    from scipy.integrate import solve_ivp
+    from scipy.integrate._ivp import dop853_coefficients as ref
+
+    from rockbench.analytic import _integrate as ig
+
+    a = np.zeros((16, 16))
+    for i, row in enumerate(ig.A):
+        for j, v in row:
+            a[i, j] = v
+    np.testing.assert_array_equal(a[1:], ref.A[1:])
+    np.testing.assert_array_equal(ig.C, ref.C)
+    for mine, theirs in ((ig.E3, ref.E3), (ig.E5, ref.E5)):
+        v = np.zeros(13)
+        for j, x in mine:
+            v[j] = x
+        np.testing.assert_array_equal(v, theirs)
+    d = np.zeros((4, 16))
+    for i, row in enumerate(ig.D):
+        for j, x in row:
+            d[i, j] = x
+    np.testing.assert_array_equal(d, ref.D)
+
+    def alpha(t, th):
+        return -4.0 * (math.sin(-0.2 - th) + 0.3 * math.sin(20 * t) * math.cos(-0.2 - th))
+
+    res = ig.integrate_phase(alpha, 0.1, 0.01, 0.0, 3.0, rtol=1e-10, atol=1e-12,
+                             events=[lambda t, th, w: math.pi / 2 - abs(th)])
+    over = lambda t, y: math.pi / 2 - abs(y[0])  # noqa: E731
+    over.terminal, over.direction = True, -1
+    sol = solve_ivp(lambda t, y: [y[1], alpha(t, y[0])], (0.1, 3.0), [0.01, 0.0],
+                    method="DOP853", rtol=1e-10, atol=1e-12, dense_output=True, events=[over])
+    assert res.status == sol.status == 1 and res.event == 0 and res.nfev == sol.nfev
+    assert len(res.ts) == sol.t.size
+    assert res.t == pytest.approx(sol.t_events[0][0], abs=1e-12)
+    tt = np.linspace(0.1, res.t, 2001)
+    th, om = res.dense(tt)
+    np.testing.assert_allclose(th, sol.sol(tt)[0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(om, sol.sol(tt)[1], rtol=0, atol=1e-11)
+    with pytest.raises(ValueError, match="integrator"):
+        solve_single(B0.rocking(G), g=G, accel=Free().acceleration, t_out=[0, 1],
+                     integrator="rk4")
