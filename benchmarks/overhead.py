@@ -34,8 +34,7 @@ __all__ = ["run", "cases"]
 GOAL = 0.10
 
 
-# ---------------------------------------------------------------------- studied, not adopted
-# Kept for study but not run: it changed the dem2d trajectory (0.2 λ).
+# ---------------------------------------------------------------------- cases
 def cases(quick: bool) -> list[tuple[str, Scenario]]:
     """(label, scenario) pairs: B0 free rocking and a forced single block."""
     free_d, forced_d = (1.0, 0.5) if quick else (2.0, 1.0)

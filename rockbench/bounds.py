@@ -67,7 +67,7 @@ class SpeedBound:
         v_base = 0.0
         if not exc.is_free:
             t_end = min(scenario.duration, max(exc.end_time, 0.0))
-            t = np.linspace(0.0, t_end, 4001)
+            t = np.linspace(0.0, t_end, 801)  # ~16 samples per cycle at 5 Hz over 10 s
             v_base = float(np.max(np.abs(exc.velocity(t))))
         v_max = factor * (math.sqrt(2.0 * scenario.g * height) + 2.0 * v_base) + SPEED_FLOOR
         k_min = min(math.sqrt(b.inertia[1] / b.m) for b in scenario.blocks)

@@ -315,7 +315,7 @@ class _Watchdog:
         self.masses = np.array([b.m for b in scenario.blocks])
         height = scenario.stack.total_height
         exc = scenario.excitation
-        t = np.linspace(0.0, min(scenario.duration, max(exc.end_time, 0.0)), 2001)
+        t = np.linspace(0.0, min(scenario.duration, max(exc.end_time, 0.0)), 801)
         u_base = float(np.max(np.abs(exc.displacement(t)))) if t[-1] > 0 else 0.0
         # a falling block cannot leave a ball of a few stack heights around its start
         self.reach = 3.0 * height + 2.0 * u_base + 1.0

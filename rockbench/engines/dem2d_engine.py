@@ -64,8 +64,9 @@ from rockbench.scenarios import Scenario
 
 __all__ = ["Dem2dEngine", "Dem2dSettings"]
 
-#: Steps of base displacement evaluated at once when the base is driven step by step.
-_BASE_CHUNK = 4096
+#: Steps of base displacement evaluated at once (one vectorised call per chunk;
+#: 160 kB of float64).
+_BASE_CHUNK = 20_000
 
 
 @dataclass(frozen=True)
@@ -157,6 +158,7 @@ class Dem2dEngine(Engine):
         self._nb = 0
         self._buf = np.zeros(0)
         self._buf_start = 0
+        self._drive_end = 0
         self._step_index = -1
 
     @classmethod
@@ -265,34 +267,43 @@ class Dem2dEngine(Engine):
             shear=np.zeros((npairs, int(s.subcontacts))), kn=float(s.kn), ks=float(s.ks),
             mu=float(scenario.contact.friction), beta=float(beta), g=float(scenario.g),
         )
+        # the kernel writes the blocks' poses after every call (read for free)
+        self._poses = np.zeros((nb, 7))
+        K.write_poses(pos, self._poses)
         self._args = (pos, vel, inv_m, inv_i, lverts, lnorm, nverts, radius,
                       self._state["pairs"], self._state["pair_depth"],
                       self._state["pair_edges"], self._state["shear"], float(s.kn),
                       float(s.ks), float(scenario.contact.friction), float(beta),
-                      float(scenario.g))
+                      float(scenario.g), self._poses)
         self._exc = exc
         self._dt = dt
         self._nb = nb
         self._buf = np.zeros(0)
         self._buf_start = 0
+        # last step that may be driven (the run's end, or the first output
+        # sample after the excitation's): chunks stop there
+        self._drive_end = int(math.ceil(t_end / dt)) + k + 1
         self._step_index = -1
         self._still = np.zeros(0)
-        self._poses = np.zeros((nb, 7))
         return dt
 
     def _base_positions(self, k0: int, n: int) -> np.ndarray:
-        """u_g at steps k0 … k0 + n − 1 (exact displacement, no drift).
+        """u_g at the global steps k0 … k0 + n − 1 (exact displacement, no drift).
 
-        Evaluated a chunk of steps at a time: an excitation's vectorised
-        evaluation has a fixed cost (~0.1 ms for a ramped sinusoid) that would
-        otherwise dominate short calls.
+        Served from a buffer of u_g(k Δt) for whole chunks of global step
+        indices k (``_BASE_CHUNK`` at a time, no further than the last step
+        that may be driven; refilled from k0 when the request leaves it): an
+        excitation's vectorised evaluation has a fixed cost (tens of µs) that
+        would otherwise dominate the few steps of one output sample. Every
+        value is ``displacement(k · Δt)`` of its own global step index, as if
+        the whole run were evaluated at once.
         """
-        if not (self._buf_start <= k0 and k0 + n <= self._buf_start + self._buf.size):
-            self._buf_start = k0
-            m = max(n, _BASE_CHUNK)
-            self._buf = np.asarray(self._exc.displacement((k0 + np.arange(m)) * self._dt),
-                                   float)
         i = k0 - self._buf_start
+        if i < 0 or i + n > self._buf.size:
+            self._buf_start = k0
+            steps = k0 + np.arange(max(n, min(_BASE_CHUNK, self._drive_end - k0)))
+            self._buf = np.asarray(self._exc.displacement(steps * self._dt), float)
+            i = 0
         return self._buf[i:i + n]
 
     def _drive_base(self, t: float, dt: float) -> None:
@@ -304,9 +315,17 @@ class Dem2dEngine(Engine):
         """Take ``n`` steps from ``t0`` with the base driven, in one compiled call.
 
         Optional hook (proposed for the base class): replaces n pairs of
-        ``_drive_base(t, dt)`` + ``_advance(1)`` by one call.
+        ``_drive_base(t, dt)`` + ``_advance(1)`` by one call. The base
+        positions of global steps k0 … k0 + n − 1 (k0 = t0 / Δt) are a slice of
+        the chunk buffer of :meth:`_base_positions` (inlined: this runs once
+        per output sample, a few compiled steps of well under a µs each).
         """
-        K.advance(n, self._dt, *self._args, self._base_positions(int(round(t0 / dt)), n))
+        k0 = int(round(t0 / dt))
+        i = k0 - self._buf_start
+        if i < 0 or i + n > self._buf.size:
+            K.advance(n, self._dt, *self._args, self._base_positions(k0, n))
+        else:
+            K.advance(n, self._dt, *self._args, self._buf[i:i + n])
 
     def _fix_base(self) -> bool:
         self._step_index = -1
@@ -321,15 +340,8 @@ class Dem2dEngine(Engine):
         self._step_index = k + n
 
     def _read_poses(self) -> np.ndarray:
-        p = self._poses
-        pos = self._state["pos"]
-        for i in range(self._nb):
-            half = 0.5 * pos[i, 2]
-            p[i, 0] = pos[i, 0]
-            p[i, 2] = pos[i, 1]
-            p[i, 3] = math.cos(half)
-            p[i, 5] = math.sin(half)
-        return p
+        # written by the kernel after every advance (and by _build at the start)
+        return self._poses
 
     def _teardown(self) -> None:
         self._state = {}

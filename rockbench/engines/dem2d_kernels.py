@@ -56,7 +56,7 @@ except ImportError:  # pragma: no cover - depends on the environment
         return lambda f: f
 
 
-__all__ = ["HAVE_NUMBA", "advance", "world_geometry"]
+__all__ = ["HAVE_NUMBA", "advance", "world_geometry", "write_poses"]
 
 #: Edges closer than this to anti-parallel may form a contact (cos 45°).
 _COS_MAX = math.cos(math.radians(45.0)) - 1e-9
@@ -78,6 +78,21 @@ def world_geometry(pos: np.ndarray, lverts: np.ndarray, lnorm: np.ndarray, nvert
             nz = lnorm[b, k, 1]
             wnorm[b, k, 0] = nx * c + nz * s
             wnorm[b, k, 1] = -nx * s + nz * c
+
+
+@njit(cache=True)
+def write_poses(pos: np.ndarray, poses: np.ndarray) -> None:
+    """Poses (x, y, z, q_w, q_x, q_y, q_z) of the first ``len(poses)`` bodies (in place).
+
+    Only the x, z, q_w and q_y columns are written (y, q_x and q_z stay 0): a
+    rotation θ about +y is the quaternion (cos θ/2, 0, sin θ/2, 0).
+    """
+    for b in range(poses.shape[0]):
+        half = 0.5 * pos[b, 2]
+        poses[b, 0] = pos[b, 0]
+        poses[b, 2] = pos[b, 1]
+        poses[b, 3] = math.cos(half)
+        poses[b, 5] = math.sin(half)
 
 
 @njit(cache=True)
@@ -241,7 +256,7 @@ def advance(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarr
             inv_i: np.ndarray, lverts: np.ndarray, lnorm: np.ndarray, nverts: np.ndarray,
             radius: np.ndarray, pairs: np.ndarray, pair_depth: np.ndarray,
             pair_edges: np.ndarray, shear: np.ndarray, kn: float, ks: float, mu: float,
-            beta: float, g: float, base_u: np.ndarray) -> None:
+            beta: float, g: float, poses: np.ndarray, base_u: np.ndarray) -> None:
     """Take ``n`` central-difference steps (state arrays updated in place).
 
     Parameters
@@ -277,6 +292,9 @@ def advance(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarr
         Stiffness-proportional damping coefficient (s).
     g : float
         Gravity (m/s², along −z).
+    poses : ndarray (n_bodies − 1, 7)
+        Output: the blocks' poses after the last step (:func:`write_poses`),
+        so that reading them costs the caller nothing.
     base_u : ndarray
         Base displacement at the start of each of the ``n`` steps; empty: the
         base holds its position with zero velocity.
@@ -306,3 +324,4 @@ def advance(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarr
             pos[b, 0] += vel[b, 0] * dt
             pos[b, 1] += vel[b, 1] * dt
             pos[b, 2] += vel[b, 2] * dt
+    write_poses(pos, poses)
