@@ -21,7 +21,9 @@ Contract for implementers (the numbered rules that every plugin follows)
    steps in one call (e.g. a compiled loop over precomputed base velocities).
 5. Optionally implement :meth:`_fix_base` (called once when the excitation has
    ended): make the base still and return True so that steps can be batched.
-6. Implement :meth:`_advance`: take ``n`` physics steps.
+6. Implement :meth:`_advance`: take ``n`` physics steps. Optionally override
+   :meth:`_sample_free` / :meth:`_sample_driven` to take many output samples
+   in one call (they fill an array of poses; the defaults loop in Python).
 7. Implement :meth:`_read_poses`: return an array (n_blocks, 7) with each block
    centroid's world position (x, y, z) and orientation quaternion (w, x, y, z),
    bottom block first. 2D engines map their plane to x–z and set y = 0.
@@ -206,26 +208,30 @@ class Engine(ABC):
 
     def _sample_aligned(self, poses: np.ndarray, t_out: np.ndarray, dt: float, k: int,
                         exc: Any, watch: _Watchdog) -> tuple[int, tuple[Status, str] | None]:
-        """Advance k steps per output sample (batched once the base is still)."""
+        """Advance k steps per output sample, a watchdog chunk of samples per hook call."""
         n_out = t_out.size
         step = 0
         batched = exc.is_free
-        checked = 1
-        for i in range(1, n_out):
+        i = 1
+        while i < n_out:
+            m = min(watch.chunk, n_out - i)
             if batched:
-                self._advance(k)
-                step += k
+                self._sample_free(poses[i:i + m], k)
             else:
-                self._advance_driven(step * dt, k, dt)
-                step += k
-                if step * dt > exc.end_time:
-                    batched = self._fix_base()
-            poses[i] = self._read_poses()
-            if i - checked >= watch.chunk - 1 or i == n_out - 1:
-                bad = watch.check(poses[checked:i + 1], t_out[checked:i + 1])
-                if bad is not None:
-                    return checked + bad[0] + 1, bad[1]
-                checked = i + 1
+                # drive up to the first sample that ends past the excitation, then
+                # let the engine hold the base still
+                j = 1
+                while j < m and (step + j * k) * dt <= exc.end_time:
+                    j += 1
+                m = j
+                self._sample_driven(poses[i:i + m], step, k, dt)
+            step += m * k
+            if not batched and step * dt > exc.end_time:
+                batched = self._fix_base()
+            bad = watch.check(poses[i:i + m], t_out[i:i + m])
+            if bad is not None:
+                return i + bad[0] + 1, bad[1]
+            i += m
         return n_out, None
 
     def _sample_interpolated(self, poses: np.ndarray, t_out: np.ndarray, dt: float, k: int,
@@ -280,6 +286,23 @@ class Engine(ABC):
         for j in range(n):
             self._drive_base(t0 + j * dt, dt)
             self._advance(1)
+
+    def _sample_free(self, out: np.ndarray, k: int) -> None:
+        """Fill ``out`` (m, n_blocks, 7) with the poses after each of m runs of k steps.
+
+        The base is still. The default calls :meth:`_advance` and
+        :meth:`_read_poses` per sample; a compiled engine may override it to
+        take many samples per call (rule 6).
+        """
+        for j in range(out.shape[0]):
+            self._advance(k)
+            out[j] = self._read_poses()
+
+    def _sample_driven(self, out: np.ndarray, step0: int, k: int, dt: float) -> None:
+        """Like :meth:`_sample_free` while driving the base, starting at step ``step0``."""
+        for j in range(out.shape[0]):
+            self._advance_driven((step0 + j * k) * dt, k, dt)
+            out[j] = self._read_poses()
 
     def _fix_base(self) -> bool:
         """Hold the base still after the excitation (rule 5); True if steps may be batched."""
