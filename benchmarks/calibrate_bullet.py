@@ -11,57 +11,30 @@ class drives them, against a minimal raw pybullet loop with the same settings.
 Usage::
 
     python benchmarks/calibrate_bullet.py [--preset accurate,fast] [--set knob=value ...]
-        [--only free|pulse] [--no-overhead]
+        [--only free|pulse] [--duration 20] [--cases substr,...] [--no-overhead]
 """
 
 from __future__ import annotations
 
-import argparse
 import math
 import time
 
 import numpy as np
 import pybullet as pb
 
-from rockbench.analytic.housner import single_block_reference
 from rockbench.engines.bullet_engine import BulletEngine
 from rockbench.scenarios import Scenario, get_scenario
 
-FREE = ["free-b0"] + [f"free-{b}-{t}" for b in ("b1", "b2", "b3") for t in (0.2, 0.5, 0.99)]
-PULSES = [f"single-pulse-{f:.1f}hz-{a}mm" for f, a in
-          ((3.0, 8), (3.3, 6), (3.3, 8), (5.0, 4), (5.0, 5), (5.0, 6))]
+try:
+    from benchmarks import calibration as cal
+except ImportError:  # run as a file: python benchmarks/calibrate_bullet.py
+    import calibration as cal
 
-
-def zero_crossings(t: np.ndarray, th: np.ndarray) -> np.ndarray:
-    """Times where θ changes sign (linear interpolation)."""
-    s = np.sign(th)
-    i = np.nonzero(s[1:] * s[:-1] < 0)[0]
-    return t[i] - th[i] * (t[i + 1] - t[i]) / (th[i + 1] - th[i])
-
-
-def run_free(engine: BulletEngine, sc: Scenario, settings: object) -> dict:
-    ref = single_block_reference(sc)
-    tr = engine.simulate(sc, settings)
-    lam = sc.critical_angle
-    th, th_ref = tr.theta[:, 0], ref.theta[: tr.t.size, 0]
-    rest = ref.extra.get("rest_time") or sc.duration
-    upto = tr.t <= rest
-    err = np.abs(th - th_ref) / lam
-    zc = zero_crossings(tr.t, th)
-    imp = np.asarray(ref.impacts)
-    ie = [100 * (zc[k] - imp[k]) / imp[k] if k < min(zc.size, imp.size) else math.nan
-          for k in range(3)]
-    return dict(name=sc.name, status=str(tr.status), err=float(err[upto].max()),
-                err_all=float(err.max()), imp=ie, wall=tr.wall_time)
-
-
-def run_pulse(engine: BulletEngine, sc: Scenario, settings: object) -> dict:
-    ref = single_block_reference(sc)
-    tr = engine.simulate(sc, settings)
-    lam = sc.critical_angle
-    peak, peak_ref = np.max(np.abs(tr.theta[:, 0])), np.max(np.abs(ref.theta[:, 0]))
-    return dict(name=sc.name, status=str(tr.status), peak=peak / lam, peak_ref=peak_ref / lam,
-                ratio=peak / peak_ref, wall=tr.wall_time)
+FREE_COLS = [*cal.CASE, cal.col("max err/λ (to rest)", "err", ".4f"),
+             cal.col("max err/λ (20 s)", "err_all", ".4f"), *cal.impact_cols("+.3f"), cal.WALL]
+PULSE_COLS = [cal.col("pulse", "case"), cal.col("status", "status"),
+              cal.col("max|θ|/λ engine", "peak", ".4f"), cal.col("reference", "peak_ref", ".4f"),
+              cal.ratio_col("+.2f"), cal.WALL]
 
 
 def overhead(settings: object, sc: Scenario, repeat: int = 3) -> tuple[float, float]:
@@ -99,37 +72,22 @@ def overhead(settings: object, sc: Scenario, repeat: int = 3) -> tuple[float, fl
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--preset", default="accurate,fast")
-    ap.add_argument("--set", action="append", default=[], metavar="KNOB=VALUE")
-    ap.add_argument("--only", choices=("free", "pulse"))
-    ap.add_argument("--no-overhead", action="store_true")
-    args = ap.parse_args(argv)
-    overrides = dict(kv.split("=", 1) for kv in args.set)
+    args = cal.parser(__doc__).parse_args(argv)
+    overrides = cal.overrides(args)
     engine = BulletEngine()
     for preset in args.preset.split(","):
         settings = engine.settings(preset, **overrides)
         print(f"\n### bullet `{preset}` ({', '.join(f'{k}={v}' for k, v in overrides.items())})"
               f"  effective dt = {settings.dt:.3g} s\n")
         if args.only != "pulse":
-            print("| case | status | max err/λ (to rest) | max err/λ (20 s) | "
-                  "impact 1 (%) | impact 2 (%) | impact 3 (%) | wall (s) |")
-            print("|---|---|---|---|---|---|---|---|")
-            worst = 0.0
-            for name in FREE:
-                r = run_free(engine, get_scenario(name), settings)
-                worst = max(worst, r["err"])
-                i1, i2, i3 = r["imp"]
-                print(f"| {r['name']} | {r['status']} | {r['err']:.4f} | {r['err_all']:.4f} | "
-                      f"{i1:+.3f} | {i2:+.3f} | {i3:+.3f} | {r['wall']:.2f} |", flush=True)
+            rows = cal.table(FREE_COLS, cal.select(cal.free_cases(args.duration), args.cases),
+                             lambda sc, s=settings: cal.measure_free(engine, s, sc))
+            worst = max([0.0, *(r["err"] for r in rows)])
             print(f"\nworst free-rocking error: {worst:.4f} λ")
         if args.only != "free":
-            print("\n| pulse | status | max|θ|/λ engine | reference | ratio − 1 (%) | wall (s) |")
-            print("|---|---|---|---|---|---|")
-            for name in PULSES:
-                r = run_pulse(engine, get_scenario(name), settings)
-                print(f"| {r['name']} | {r['status']} | {r['peak']:.4f} | {r['peak_ref']:.4f} | "
-                      f"{100 * (r['ratio'] - 1):+.2f} | {r['wall']:.2f} |", flush=True)
+            print()
+            cal.table(PULSE_COLS, cal.select(cal.pulse_cases(), args.cases),
+                      lambda sc, s=settings: cal.measure_pulse(engine, s, sc))
         if not args.no_overhead:
             hooks, raw = overhead(settings, get_scenario("free-b0"))
             print(f"\nadapter overhead on free-b0: hooks {hooks:.2f} s vs raw loop {raw:.2f} s "

@@ -28,22 +28,17 @@ import time
 
 import numpy as np
 
-from rockbench.analytic.housner import single_block_reference
 from rockbench.engines.dem2d_engine import Dem2dEngine
-from rockbench.metrics import impact_times
-from rockbench.scenarios import Block, Contact, Scenario, SinePulse
+from rockbench.scenarios import Scenario
 
-FREE_BLOCKS = {
-    "B0": (1.0, 0.2, 5.0),
-    "B1": (0.5, 0.2, 0.75),
-    "B2": (0.5, 0.2, 1.0),
-    "B3": (0.5, 0.2, 1.25),
-}
-#: (f Hz, A m) -> the paper's Table 6 max |θ|/λ: (analytical, 3DEC DEM)
-PULSES = {
-    (3.0, 0.008): (0.183, 0.189), (3.3, 0.006): (0.115, 0.139), (3.3, 0.008): (0.209, 0.187),
-    (5.0, 0.004): (0.103, 0.089), (5.0, 0.005): (0.129, 0.107), (5.0, 0.006): (0.115, 0.122),
-}
+try:
+    from benchmarks import calibration as cal
+except ImportError:  # run as a file: python benchmarks/calibrate_dem2d.py
+    import calibration as cal
+
+#: The paper's Table 6 max |θ|/λ per Single #2 pulse: (analytical, 3DEC DEM)
+PAPER = dict(zip(cal.PULSES, [(0.183, 0.189), (0.115, 0.139), (0.209, 0.187),
+                              (0.103, 0.089), (0.129, 0.107), (0.115, 0.122)], strict=True))
 #: (f Hz, A mm) -> the paper's Tables 9/10 max |θ|/λ: (top analytical, top 3DEC,
 #: bottom analytical, bottom 3DEC); NaN where the paper prints none
 STACK_PULSES = {
@@ -54,24 +49,16 @@ STACK_PULSES = {
 }
 DEFAULT_CONFIGS = ["accurate", "accurate:subcontacts=10", "fast", "paper"]
 
-
-def free_cases(duration: float = 20.0) -> list[Scenario]:
-    """The catalog's free-rocking scenarios."""
-    out = []
-    for name, (w, d, h) in FREE_BLOCKS.items():
-        for tilt in (0.5,) if name == "B0" else (0.2, 0.5, 0.99):
-            out.append(Scenario(f"free-{name.lower()}-{tilt}", Block(w, d, h, mass=1.0),
-                                Contact(1.0, 0.0), initial_tilt=tilt, duration=duration,
-                                output_rate=1000.0))
-    return out
-
-
-def pulse_cases(duration: float = 4.0) -> list[Scenario]:
-    """The six Single #2 one-sine pulses."""
-    blk = Block(0.17, 0.502, 1.0, density=2670.0)
-    return [Scenario(f"single-pulse-{f}hz-{a * 1e3:g}mm", blk, Contact(1.0, 0.0),
-                     SinePulse(f, a), duration=duration, output_rate=1000.0)
-            for f, a in PULSES]
+TIMESTEP = cal.col("Δt s", lambda r: r["traj"].settings["effective_timestep"], ".3g")
+FREE_COLS = [*cal.CASE, cal.col("max err/λ (to rest)", "err", ".4f"),
+             *cal.impact_cols(("+.3f", "+.2f", "+.2f"), "impact {} %"),
+             cal.col("1st peak / Housner", "peak1", ".3f"), TIMESTEP, cal.WALL_S]
+PULSE_COLS = [cal.col("pulse", "case"), cal.col("status", "status"),
+              cal.col("max θ/λ dem2d", "peak", ".4f"), cal.col("Housner", "peak_ref", ".4f"),
+              cal.ratio_col("+.1f", "dem2d/Housner − 1", " %"),
+              cal.col("paper: analytical", lambda r: PAPER[r["case"]][0], ".3f"),
+              cal.col("paper: 3DEC", lambda r: PAPER[r["case"]][1], ".3f"), TIMESTEP,
+              cal.WALL_S]
 
 
 def run_stacks(cfg: dict) -> None:
@@ -118,30 +105,13 @@ def first_peak(t: np.ndarray, th: np.ndarray, imps: np.ndarray) -> float:
     return float(np.max(np.abs(th[m]))) if m.any() else math.nan
 
 
-def run_free(sc: Scenario, cfg: dict) -> dict:
-    ref = single_block_reference(sc)
-    tr = Dem2dEngine().simulate(sc, cfg)
-    lam = sc.critical_angle
-    rest = (ref.extra or {}).get("rest_time") or sc.duration
-    n = min(tr.t.size, ref.t.size)
-    upto = tr.t[:n] <= rest
-    err = float(np.max(np.abs(tr.theta[:n, 0] - ref.theta[:n, 0])[upto])) / lam
-    t_ref, t_eng = impact_times(ref), impact_times(tr)
-    imp = [(t_eng[k] - t_ref[k]) / t_ref[k] * 100 if k < min(t_ref.size, t_eng.size)
-           else math.nan for k in range(3)]
-    pk = first_peak(tr.t, tr.theta[:, 0], t_eng) / first_peak(ref.t, ref.theta[:, 0], t_ref)
-    return dict(case=sc.name, status=str(tr.status), err=err, imp=imp, peak1=pk,
-                wall=tr.wall_time, dt=tr.settings["effective_timestep"])
-
-
-def run_pulse(sc: Scenario, cfg: dict) -> dict:
-    ref = single_block_reference(sc)
-    tr = Dem2dEngine().simulate(sc, cfg)
-    lam = sc.critical_angle
-    pk = float(np.max(np.abs(tr.theta[:, 0]))) / lam
-    pk_ref = float(np.max(np.abs(ref.theta[:, 0]))) / lam
-    return dict(case=sc.name, status=str(tr.status), peak=pk, peak_ref=pk_ref,
-                ratio=pk / pk_ref, wall=tr.wall_time, dt=tr.settings["effective_timestep"])
+def measure_free(engine: Dem2dEngine, cfg: dict, sc: Scenario) -> dict:
+    """The common free-rocking row plus the first post-impact peak against Housner's."""
+    r = cal.measure_free(engine, cfg, sc)
+    tr, ref = r["traj"], r["ref"]
+    r["peak1"] = (first_peak(tr.t, tr.theta[:, 0], cal.zero_crossings(tr.t, tr.theta[:, 0]))
+                  / first_peak(ref.t, ref.theta[:, 0], np.asarray(ref.impacts)))
+    return r
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -152,7 +122,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", choices=("free", "pulse", "stack"), default=None)
     args = ap.parse_args(argv)
     print(f"dem2d {Dem2dEngine.version()}\n")
-    Dem2dEngine().simulate(free_cases(0.01)[0])  # compile / load the kernels once
+    engine = Dem2dEngine()
+    engine.simulate(cal.free_cases(0.01)[0])  # compile / load the kernels once
     for text in args.config or DEFAULT_CONFIGS:
         cfg = parse_config(text)
         s = Dem2dEngine.settings(cfg["preset"], **{k: v for k, v in cfg.items()
@@ -160,24 +131,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"### `{text}`: {s.to_dict()}\n")
         t0 = time.perf_counter()
         if args.only in (None, "free"):
-            print("| case | status | max err/λ (to rest) | impact 1 % | impact 2 % | impact 3 % "
-                  "| 1st peak / Housner | Δt s | wall s |")
-            print("|---|---|---|---|---|---|---|---|---|")
-            for sc in free_cases(args.duration):
-                r = run_free(sc, cfg)
-                print(f"| {r['case']} | {r['status']} | {r['err']:.4f} | {r['imp'][0]:+.3f} | "
-                      f"{r['imp'][1]:+.2f} | {r['imp'][2]:+.2f} | {r['peak1']:.3f} | "
-                      f"{r['dt']:.3g} | {r['wall']:.2f} |", flush=True)
+            cal.table(FREE_COLS, cal.free_cases(args.duration),
+                      lambda sc, cfg=cfg: measure_free(engine, cfg, sc))
             print()
         if args.only in (None, "pulse"):
-            print("| pulse | status | max θ/λ dem2d | Housner | dem2d/Housner − 1 | "
-                  "paper: analytical | paper: 3DEC | Δt s | wall s |")
-            print("|---|---|---|---|---|---|---|---|---|")
-            for sc, (an, dem) in zip(pulse_cases(), PULSES.values(), strict=True):
-                r = run_pulse(sc, cfg)
-                print(f"| {r['case']} | {r['status']} | {r['peak']:.4f} | {r['peak_ref']:.4f} "
-                      f"| {(r['ratio'] - 1) * 100:+.1f} % | {an:.3f} | {dem:.3f} | "
-                      f"{r['dt']:.3g} | {r['wall']:.2f} |", flush=True)
+            cal.table(PULSE_COLS, cal.pulse_cases(),
+                      lambda sc, cfg=cfg: cal.measure_pulse(engine, cfg, sc))
             print()
         if args.only in (None, "stack"):
             run_stacks(cfg)

@@ -30,9 +30,10 @@ import sys
 import tempfile
 import time
 import traceback
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from concurrent.futures import TimeoutError as FutureTimeout
 from concurrent.futures import as_completed
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -45,7 +46,8 @@ from rockbench.errors import RockbenchError, UnknownEngine
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["Job", "run_job", "run_jobs", "default_jobs", "run_job_subprocess", "EXECUTORS"]
+__all__ = ["Job", "run_job", "run_jobs", "default_jobs", "run_job_subprocess", "dask_client",
+           "EXECUTORS"]
 
 #: Names accepted by ``run_jobs(executor=...)`` and ``--executor``.
 EXECUTORS = ("process", "dask")
@@ -320,16 +322,17 @@ def _child_main(src: str, dst: str) -> int:
     return 0
 
 
-def _run_dask(jobs: list[Job], limit: Callable[[Job], float | None],
-              done: Callable[[int, Trajectory], None], n_jobs: int | None,
-              scheduler: Any) -> None:
+@contextmanager
+def dask_client(n_jobs: int | None, scheduler: Any) -> Iterator[Any]:
+    """A Dask client for the ``dask`` executor: ``scheduler`` itself if it is a
+    ``distributed.Client``, a client of the scheduler at that address if it is a
+    string, else a local cluster of ``n_jobs`` single-threaded worker processes.
+    What it opened is closed on exit."""
     try:
         from distributed import Client, LocalCluster
-        from distributed import as_completed as dask_completed
     except ImportError:
         raise RockbenchError("--executor dask needs Dask distributed: "
                              "pip install 'rockbench[dask]'") from None
-    specs = {name: _engine_spec(name) for name in {j.engine for j in jobs}}
     cluster = None
     if scheduler is None:
         cluster = LocalCluster(n_workers=n_jobs or default_jobs(), threads_per_worker=1,
@@ -342,8 +345,22 @@ def _run_dask(jobs: list[Job], limit: Callable[[Job], float | None],
             raise RockbenchError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from None
     else:
         client = scheduler
-    own = client is not scheduler
     try:
+        yield client
+    finally:
+        if client is not scheduler:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _run_dask(jobs: list[Job], limit: Callable[[Job], float | None],
+              done: Callable[[int, Trajectory], None], n_jobs: int | None,
+              scheduler: Any) -> None:
+    with dask_client(n_jobs, scheduler) as client:
+        from distributed import as_completed as dask_completed
+
+        specs = {name: _engine_spec(name) for name in {j.engine for j in jobs}}
         futures = {client.submit(run_job_subprocess, job, limit(job), specs[job.engine],
                                  pure=False, key=f"rockbench-{i}-{os.getpid()}-{time.time_ns()}"):
                    i for i, job in enumerate(jobs)}
@@ -360,11 +377,6 @@ def _run_dask(jobs: list[Job], limit: Callable[[Job], float | None],
         except BaseException:
             client.cancel(list(futures))
             raise
-    finally:
-        if own:
-            client.close()
-        if cluster is not None:
-            cluster.close()
 
 
 if __name__ == "__main__":  # the isolated child of run_job_subprocess

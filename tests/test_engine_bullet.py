@@ -9,18 +9,14 @@ import pytest
 
 pytest.importorskip("pybullet")
 
+from engine_helpers import zero_crossings  # noqa: E402
+
 from rockbench.analytic.housner import single_block_reference  # noqa: E402
 from rockbench.engines import SettingsError, get_engine  # noqa: E402
 from rockbench.engines.bullet_engine import BulletEngine, BulletSettings  # noqa: E402
 from rockbench.metrics import impact_times  # noqa: E402
 from rockbench.scenarios import Block, Scenario, SinePulse, get_scenario  # noqa: E402
 from rockbench.trajectory import Status  # noqa: E402
-
-
-def zero_crossings(t: np.ndarray, th: np.ndarray) -> np.ndarray:
-    s = np.sign(th)
-    i = np.nonzero(s[1:] * s[:-1] < 0)[0]
-    return t[i] - th[i] * (t[i + 1] - t[i]) / (th[i + 1] - th[i])
 
 
 @pytest.fixture(scope="module")

@@ -9,75 +9,23 @@ import pytest
 
 pytest.importorskip("dartpy")
 
+from engine_helpers import B0, B2, PAPER_STACK, SINGLE2, zero_crossings  # noqa: E402
+
+from rockbench.analytic.housner import single_block_reference  # noqa: E402
 from rockbench.engines.dart_engine import DartEngine, DartSettings, _prism_obj  # noqa: E402
 from rockbench.engines.settings import SettingsError  # noqa: E402
 from rockbench.scenarios import Block, Scenario, SinePulse, Stack  # noqa: E402
 
-B0 = Block(1.0, 0.2, 5.0, mass=1.0)
-B2 = Block(0.5, 0.2, 1.0, mass=1.0)
-SINGLE2 = Block(width=0.17, depth=0.502, height=1.0, density=2670.0)
-PAPER_STACK = Stack((Block(0.20, 0.40, 0.60, density=2670.0, chamfer=0.005),
-                     Block(0.15, 0.55, 0.60, density=2670.0, chamfer=0.005)))
-
 
 def housner(scenario: Scenario) -> np.ndarray:
-    """θ_ref on the output times: the project's reference if present, else a
-    compact event-driven Housner integration (DOP853, tight tolerances)."""
-    try:
-        from rockbench.analytic.housner import single_block_reference
-    except ImportError:
-        single_block_reference = None
-    t_out = scenario.output_times()
-    if single_block_reference is not None:
-        ref = single_block_reference(scenario)
-        th = np.asarray(ref.theta)
-        th = th[:, 0] if th.ndim == 2 else th
-        return np.interp(t_out, np.asarray(ref.t), th)
-    from scipy.integrate import solve_ivp
-
-    rp = scenario.blocks[0].rocking(scenario.g)
-    lam, p, g, eta = rp.lam, rp.p, scenario.g, rp.eta
-    exc = scenario.excitation
-
-    def rhs(t: float, y: np.ndarray) -> list[float]:
-        s = 1.0 if y[0] > 0 else -1.0
-        a = float(exc.acceleration(t))
-        return [y[1], -p * p * (math.sin(s * lam - y[0]) + a / g * math.cos(s * lam - y[0]))]
-
-    out = np.zeros_like(t_out)
-    fine = np.linspace(0.0, t_out[-1], int(t_out[-1] * 20000) + 1)
-    a_fine = np.asarray(exc.acceleration(fine), float)
-    t, y, resting = 0.0, np.array([scenario.theta0, 0.0]), scenario.theta0 == 0.0
-    while t < t_out[-1]:
-        if resting:
-            idx = np.nonzero((fine > t) & (np.abs(a_fine) > g * math.tan(lam)))[0]
-            if idx.size == 0:
-                break
-            t, resting = float(fine[idx[0]]), False
-            y = np.array([-math.copysign(1e-12, a_fine[idx[0]]), 0.0])
-            continue
-
-        def hit(_t: float, yy: np.ndarray) -> float:
-            return yy[0]
-
-        hit.terminal, hit.direction = True, -math.copysign(1.0, y[0])
-        sol = solve_ivp(rhs, (t, t_out[-1]), y, method="DOP853", rtol=1e-11, atol=1e-13,
-                        events=hit, dense_output=True, max_step=5e-3)
-        m = (t_out >= t) & (t_out <= sol.t[-1])
-        if m.any():
-            out[m] = sol.sol(t_out[m])[0]
-        if sol.status != 1:
-            break
-        t, om = float(sol.t_events[0][0]), float(sol.y_events[0][0][1]) * eta
-        resting = abs(om) < 1e-4
-        y = np.array([math.copysign(1e-13, om), om])
-    return out
+    """θ of the project's Housner reference at the scenario's output times."""
+    ref = single_block_reference(scenario)
+    return np.interp(scenario.output_times(), np.asarray(ref.t), np.asarray(ref.theta)[:, 0])
 
 
 def crossings(t: np.ndarray, th: np.ndarray, n: int = 3) -> np.ndarray:
-    s = np.sign(th)
-    i = np.nonzero(s[:-1] * s[1:] < 0)[0][:n]
-    return t[i] - th[i] * (t[i + 1] - t[i]) / (th[i + 1] - th[i])
+    """The first ``n`` zero crossings of θ."""
+    return zero_crossings(t, th)[:n]
 
 
 def test_free_rocking_b2_accurate_matches_housner() -> None:

@@ -16,6 +16,7 @@ import sys
 
 import numpy as np
 import pytest
+from engine_helpers import B2, PAPER_STACK, SINGLE2
 
 from rockbench.analytic.housner import single_block_reference
 from rockbench.engines import dem2d_kernels as K
@@ -23,13 +24,8 @@ from rockbench.engines import get_engine, register, unregister
 from rockbench.engines.dem2d_engine import Dem2dEngine, Dem2dSettings
 from rockbench.engines.settings import SettingsError
 from rockbench.metrics import impact_times
-from rockbench.scenarios import Block, Contact, Scenario, SinePulse, Stack
+from rockbench.scenarios import Contact, Scenario, SinePulse
 from rockbench.trajectory import Status
-
-B2 = Block(0.5, 0.2, 1.0, mass=1.0)
-SINGLE2 = Block(0.17, 0.502, 1.0, density=2670.0)
-PAPER_STACK = Stack((Block(0.20, 0.40, 0.60, density=2670.0, chamfer=0.005),
-                     Block(0.15, 0.55, 0.60, density=2670.0, chamfer=0.005)))
 
 
 @pytest.fixture(scope="session", autouse=True)

@@ -10,17 +10,13 @@ import pytest
 
 pymunk = pytest.importorskip("pymunk")
 
+from engine_helpers import B0, B2, PAPER_STACK, SINGLE2, zero_crossings  # noqa: E402
+
 from rockbench.analytic.housner import single_block_reference  # noqa: E402
 from rockbench.engines.pymunk_engine import PymunkEngine, PymunkSettings  # noqa: E402
 from rockbench.engines.settings import SettingsError  # noqa: E402
-from rockbench.scenarios import Block, Contact, Scenario, SinePulse, Stack  # noqa: E402
+from rockbench.scenarios import Block, Contact, Scenario, SinePulse  # noqa: E402
 from rockbench.trajectory import Status  # noqa: E402
-
-B0 = Block(1.0, 0.2, 5.0, mass=1.0)
-B2 = Block(0.5, 0.2, 1.0, mass=1.0)
-SINGLE2 = Block(0.17, 0.502, 1.0, density=2670.0)
-PAPER_STACK = Stack((Block(0.20, 0.40, 0.60, density=2670.0, chamfer=0.005),
-                     Block(0.15, 0.55, 0.60, density=2670.0, chamfer=0.005)))
 
 
 # ---------------------------------------------------------------- reference
@@ -28,12 +24,6 @@ def reference_theta(sc: Scenario) -> np.ndarray:
     """θ of the project's Housner reference at the scenario's output times."""
     tr = single_block_reference(sc)
     return np.interp(sc.output_times(), tr.t, tr.theta[:, 0])
-
-
-def zero_crossings(t: np.ndarray, th: np.ndarray) -> np.ndarray:
-    s = np.sign(th)
-    i = np.nonzero(s[:-1] * s[1:] < 0)[0]
-    return t[i] - th[i] * (t[i + 1] - t[i]) / (th[i + 1] - th[i])
 
 
 def free(block: Block, tilt: float, duration: float, **kw) -> Scenario:

@@ -45,7 +45,7 @@ from rockbench.analytic.overturning import (
     scan_column,
 )
 from rockbench.errors import RockbenchError, ScenarioError
-from rockbench.runner import Job, default_jobs, run_jobs
+from rockbench.runner import Job, dask_client, default_jobs, run_jobs
 from rockbench.scenarios import Block, Contact, RockingProperties, Scenario, Stack, get_scenario
 from rockbench.trajectory import Status, Trajectory
 
@@ -208,34 +208,12 @@ def _parallel_map(fn: Callable[[Any], Any], items: Sequence[Any], *, n_jobs: int
                   on_done: Callable[[int, Any], None]) -> None:
     """Apply ``fn`` to each item in worker processes (or Dask), reporting as they finish."""
     if executor == "dask":
-        try:
-            from distributed import Client, LocalCluster
+        with dask_client(n_jobs, scheduler) as client:
             from distributed import as_completed as dask_completed
-        except ImportError:
-            raise RockbenchError("--executor dask needs Dask distributed: "
-                                 "pip install 'rockbench[dask]'") from None
-        cluster = None
-        if scheduler is None:
-            cluster = LocalCluster(n_workers=n_jobs or default_jobs(), threads_per_worker=1,
-                                   processes=True, dashboard_address=None)
-            client = Client(cluster)
-        elif isinstance(scheduler, str):
-            try:
-                client = Client(scheduler, timeout="20s")
-            except OSError as exc:
-                raise RockbenchError(f"cannot reach the Dask scheduler {scheduler!r}: "
-                                     f"{exc}") from None
-        else:
-            client = scheduler
-        try:
+
             futures = {client.submit(fn, item, pure=False): i for i, item in enumerate(items)}
             for fut in dask_completed(futures):
                 on_done(futures[fut], fut.result())
-        finally:
-            if client is not scheduler:
-                client.close()
-            if cluster is not None:
-                cluster.close()
         return
     if executor != "process":
         raise RockbenchError(f"unknown executor {executor!r}; choose one of process, dask")
