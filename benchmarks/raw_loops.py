@@ -176,33 +176,35 @@ def _pymunk(eng: Any, sc: Scenario, dt: float, k: int, poses: np.ndarray) -> Non
     n_out = poses.shape[0]
     ns = driven_samples(sc, dt, k)
     nb = len(bps)
-    raw = np.zeros((n_out, nb, 3))  # x, z, angle; converted at the end
+    rows: list[tuple[float, float, float]] = []  # x, z, angle; converted at the end
+    add = rows.append
 
-    def read(i: int) -> None:
-        for b in range(nb):
-            p = get_pos(bps[b])
-            raw[i, b] = (p.x, p.y, get_angle(bps[b]))
+    def read() -> None:
+        for bp in bps:
+            p = get_pos(bp)
+            add((p.x, p.y, get_angle(bp)))
 
-    read(0)
+    read()
     if ns:
         set_pos, set_vel, bptr = lib.cpBodySetPosition, lib.cpBodySetVelocity, eng._base._body
         last = eng._v_mid.size - 1
         idx = np.minimum(np.arange(ns * k), last)
         u, v = eng._u_start[idx].tolist(), eng._v_mid[idx].tolist()
         j = 0
-        for i in range(1, ns + 1):
+        for _ in range(ns):
             for uu, vv in zip(u[j:j + k], v[j:j + k], strict=True):
                 set_pos(bptr, (uu, 0.0))
                 set_vel(bptr, (vv, 0.0))
                 step(ptr, dt)
             j += k
-            read(i)
+            read()
         eng._fix_base()
     rk = range(k)
-    for i in range(ns + 1, n_out):
+    for _ in range(ns + 1, n_out):
         for _ in rk:
             step(ptr, dt)
-        read(i)
+        read()
+    raw = np.array(rows).reshape(n_out, nb, 3)
     half = -0.5 * raw[..., 2]
     poses[..., 0] = raw[..., 0]
     poses[..., 1] = 0.0
@@ -243,30 +245,17 @@ def _drake(eng: Any, sc: Scenario, dt: float, k: int, poses: np.ndarray) -> None
 def _dem2d(eng: Any, sc: Scenario, dt: float, k: int, poses: np.ndarray) -> None:
     from rockbench.engines import dem2d_kernels as K
 
-    advance, args, pos = K.advance, eng._args, eng._state["pos"]
+    # the same compiled multi-sample kernel as the plugin: one call for the driven
+    # samples, one for the rest (the kernel writes the poses itself)
+    sample, args = K.sample, eng._args
     n_out = poses.shape[0]
     ns = driven_samples(sc, dt, k)
-    nb = eng._nb
-    raw = np.empty((n_out, nb, 3))  # x, z, angle of the blocks; converted at the end
-    raw[0] = pos[:nb]
     if ns:
         u = np.asarray(sc.excitation.displacement(np.arange(ns * k) * dt), float)
-        for i in range(1, ns + 1):
-            advance(k, dt, *args, u[(i - 1) * k:i * k])
-            raw[i] = pos[:nb]
+        sample(ns, k, dt, *args, u, poses[1:ns + 1])
         eng._fix_base()
-    still = eng._still
-    for i in range(ns + 1, n_out):
-        advance(k, dt, *args, still)
-        raw[i] = pos[:nb]
-    half = 0.5 * raw[..., 2]
-    poses[..., 0] = raw[..., 0]
-    poses[..., 1] = 0.0
-    poses[..., 2] = raw[..., 1]
-    poses[..., 3] = np.cos(half)
-    poses[..., 4] = 0.0
-    poses[..., 5] = np.sin(half)
-    poses[..., 6] = 0.0
+    if ns + 1 < n_out:
+        sample(n_out - ns - 1, k, dt, *args, eng._still, poses[ns + 1:])
 
 
 #: engine name → raw loop (scene built by the plugin's ``_build``).

@@ -212,6 +212,7 @@ class Engine(ABC):
         n_out = t_out.size
         step = 0
         batched = exc.is_free
+        end = exc.end_time  # a property: read once
         i = 1
         while i < n_out:
             m = min(watch.chunk, n_out - i)
@@ -221,12 +222,12 @@ class Engine(ABC):
                 # drive up to the first sample that ends past the excitation, then
                 # let the engine hold the base still
                 j = 1
-                while j < m and (step + j * k) * dt <= exc.end_time:
+                while j < m and (step + j * k) * dt <= end:
                     j += 1
                 m = j
                 self._sample_driven(poses[i:i + m], step, k, dt)
             step += m * k
-            if not batched and step * dt > exc.end_time:
+            if not batched and step * dt > end:
                 batched = self._fix_base()
             bad = watch.check(poses[i:i + m], t_out[i:i + m])
             if bad is not None:

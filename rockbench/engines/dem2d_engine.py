@@ -327,6 +327,19 @@ class Dem2dEngine(Engine):
         else:
             K.advance(n, self._dt, *self._args, self._buf[i:i + n])
 
+    def _sample_free(self, out: np.ndarray, k: int) -> None:
+        """All ``len(out)`` samples of ``k`` still-base steps in one compiled call."""
+        K.sample(out.shape[0], k, self._dt, *self._args, self._still, out)
+
+    def _sample_driven(self, out: np.ndarray, step0: int, k: int, dt: float) -> None:
+        """All ``len(out)`` driven samples in one compiled call.
+
+        The base positions of global steps step0 … step0 + m·k − 1 come from
+        the chunk buffer of :meth:`_base_positions`, as in :meth:`_advance_driven`.
+        """
+        K.sample(out.shape[0], k, self._dt, *self._args,
+                 self._base_positions(step0, out.shape[0] * k), out)
+
     def _fix_base(self) -> bool:
         self._step_index = -1
         return True

@@ -56,7 +56,7 @@ except ImportError:  # pragma: no cover - depends on the environment
         return lambda f: f
 
 
-__all__ = ["HAVE_NUMBA", "advance", "world_geometry", "write_poses"]
+__all__ = ["HAVE_NUMBA", "advance", "sample", "world_geometry", "write_poses"]
 
 #: Edges closer than this to anti-parallel may form a contact (cos 45°).
 _COS_MAX = math.cos(math.radians(45.0)) - 1e-9
@@ -84,15 +84,18 @@ def world_geometry(pos: np.ndarray, lverts: np.ndarray, lnorm: np.ndarray, nvert
 def write_poses(pos: np.ndarray, poses: np.ndarray) -> None:
     """Poses (x, y, z, q_w, q_x, q_y, q_z) of the first ``len(poses)`` bodies (in place).
 
-    Only the x, z, q_w and q_y columns are written (y, q_x and q_z stay 0): a
-    rotation θ about +y is the quaternion (cos θ/2, 0, sin θ/2, 0).
+    A rotation θ about +y is the quaternion (cos θ/2, 0, sin θ/2, 0); y, q_x and
+    q_z are 0 (written too, so that ``poses`` may be any buffer, e.g. NaN-filled).
     """
     for b in range(poses.shape[0]):
         half = 0.5 * pos[b, 2]
         poses[b, 0] = pos[b, 0]
+        poses[b, 1] = 0.0
         poses[b, 2] = pos[b, 1]
         poses[b, 3] = math.cos(half)
+        poses[b, 4] = 0.0
         poses[b, 5] = math.sin(half)
+        poses[b, 6] = 0.0
 
 
 @njit(cache=True)
@@ -252,6 +255,36 @@ def _contact_forces(pos: np.ndarray, vel: np.ndarray, wverts: np.ndarray, wnorm:
 
 
 @njit(cache=True)
+def _steps(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarray,
+           inv_i: np.ndarray, lverts: np.ndarray, lnorm: np.ndarray, nverts: np.ndarray,
+           radius: np.ndarray, pairs: np.ndarray, pair_depth: np.ndarray,
+           pair_edges: np.ndarray, shear: np.ndarray, kn: float, ks: float, mu: float,
+           beta: float, g: float, base_u: np.ndarray, off: int, wverts: np.ndarray,
+           wnorm: np.ndarray, force: np.ndarray, scratch: np.ndarray) -> None:
+    """``n`` steps (see :func:`advance`); the base at ``base_u[off + step]`` if driven."""
+    base = pos.shape[0] - 1
+    driven = base_u.shape[0] > 0
+    if not driven:
+        vel[base, 0] = 0.0
+    for step in range(n):
+        if driven:  # base at u(t_k); its velocity over the last step, as the blocks'
+            u = base_u[off + step]
+            vel[base, 0] = (u - pos[base, 0]) / dt
+            pos[base, 0] = u
+        world_geometry(pos, lverts, lnorm, nverts, wverts, wnorm)
+        force[:, :] = 0.0
+        _contact_forces(pos, vel, wverts, wnorm, nverts, radius, pairs, pair_depth,
+                        pair_edges, shear, kn, ks, mu, beta, dt, force, scratch)
+        for b in range(base):
+            vel[b, 0] += force[b, 0] * inv_m[b] * dt
+            vel[b, 1] += (force[b, 1] * inv_m[b] - g) * dt
+            vel[b, 2] += force[b, 2] * inv_i[b] * dt
+            pos[b, 0] += vel[b, 0] * dt
+            pos[b, 1] += vel[b, 1] * dt
+            pos[b, 2] += vel[b, 2] * dt
+
+
+@njit(cache=True)
 def advance(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarray,
             inv_i: np.ndarray, lverts: np.ndarray, lnorm: np.ndarray, nverts: np.ndarray,
             radius: np.ndarray, pairs: np.ndarray, pair_depth: np.ndarray,
@@ -300,28 +333,38 @@ def advance(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarr
         base holds its position with zero velocity.
     """
     nbody = pos.shape[0]
-    base = nbody - 1
     kmax = lverts.shape[1]
     wverts = np.empty((nbody, kmax, 2))
     wnorm = np.empty((nbody, kmax, 2))
     force = np.empty((nbody, 3))
     scratch = np.empty(2)
-    driven = base_u.shape[0] > 0
-    if not driven:
-        vel[base, 0] = 0.0
-    for step in range(n):
-        if driven:  # base at u(t_k); its velocity over the last step, as the blocks'
-            vel[base, 0] = (base_u[step] - pos[base, 0]) / dt
-            pos[base, 0] = base_u[step]
-        world_geometry(pos, lverts, lnorm, nverts, wverts, wnorm)
-        force[:, :] = 0.0
-        _contact_forces(pos, vel, wverts, wnorm, nverts, radius, pairs, pair_depth,
-                        pair_edges, shear, kn, ks, mu, beta, dt, force, scratch)
-        for b in range(base):
-            vel[b, 0] += force[b, 0] * inv_m[b] * dt
-            vel[b, 1] += (force[b, 1] * inv_m[b] - g) * dt
-            vel[b, 2] += force[b, 2] * inv_i[b] * dt
-            pos[b, 0] += vel[b, 0] * dt
-            pos[b, 1] += vel[b, 1] * dt
-            pos[b, 2] += vel[b, 2] * dt
+    _steps(n, dt, pos, vel, inv_m, inv_i, lverts, lnorm, nverts, radius, pairs, pair_depth,
+           pair_edges, shear, kn, ks, mu, beta, g, base_u, 0, wverts, wnorm, force, scratch)
+    write_poses(pos, poses)
+
+
+@njit(cache=True)
+def sample(m: int, k: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarray,
+           inv_i: np.ndarray, lverts: np.ndarray, lnorm: np.ndarray, nverts: np.ndarray,
+           radius: np.ndarray, pairs: np.ndarray, pair_depth: np.ndarray,
+           pair_edges: np.ndarray, shear: np.ndarray, kn: float, ks: float, mu: float,
+           beta: float, g: float, poses: np.ndarray, base_u: np.ndarray,
+           out: np.ndarray) -> None:
+    """``m`` runs of ``k`` steps, the blocks' poses after each written to ``out[j]``.
+
+    The same steps as ``m`` calls of :func:`advance` (``k`` steps each, base
+    displacements ``base_u[j·k:(j + 1)·k]``; empty ``base_u``: base still) in one
+    compiled call. ``out`` is (m, n_bodies − 1, 7); ``poses`` gets the last sample.
+    """
+    nbody = pos.shape[0]
+    kmax = lverts.shape[1]
+    wverts = np.empty((nbody, kmax, 2))
+    wnorm = np.empty((nbody, kmax, 2))
+    force = np.empty((nbody, 3))
+    scratch = np.empty(2)
+    for j in range(m):
+        _steps(k, dt, pos, vel, inv_m, inv_i, lverts, lnorm, nverts, radius, pairs,
+               pair_depth, pair_edges, shear, kn, ks, mu, beta, g, base_u, j * k, wverts,
+               wnorm, force, scratch)
+        write_poses(pos, out[j])
     write_poses(pos, poses)

@@ -324,6 +324,32 @@ class MujocoEngine(Engine):
             qfrc[jv] = f
             step(m, d)
 
+    def _sample_free(self, out: np.ndarray, k: int) -> None:
+        # mj_step(m, d, k) per sample, the block poses copied straight from qpos
+        m, d, step, view = self._model, self._data, self._step, self._pose_view
+        for row in out:
+            step(m, d, k)
+            row[...] = view
+
+    def _sample_driven(self, out: np.ndarray, step0: int, k: int, dt: float) -> None:
+        # _advance_driven for all the samples at once: one chunk lookup, one loop
+        n = out.shape[0] * k
+        if not (0 <= self._chunk_start <= step0 and step0 + n <= self._chunk_end):
+            self._load_chunk(step0, n)
+        a = step0 - self._chunk_start
+        m, d, step, view = self._model, self._data, self._step, self._pose_view
+        qpos, qvel, qfrc, jq, jv = d.qpos, d.qvel, d.qfrc_applied, self._jq, self._jv
+        ul, vl, fl = self._ul, self._vl, self._fl
+        for row in out:
+            b = a + k
+            for u, v, f in zip(ul[a:b], vl[a:b], fl[a:b], strict=True):
+                qpos[jq] = u
+                qvel[jv] = v
+                qfrc[jv] = f
+                step(m, d)
+            a = b
+            row[...] = view
+
     def _fix_base(self) -> bool:
         m, d = self._model, self._data
         d.qvel[self._jv] = 0.0

@@ -275,6 +275,54 @@ class PymunkEngine(Engine):
             set_vel(bptr, (v, 0.0))
             step(ptr, h)
 
+    def _sample_free(self, out: np.ndarray, k: int) -> None:
+        """All ``len(out)`` samples in one loop over locally bound C calls."""
+        if self._space_ptr is None:  # pragma: no cover - other pymunk layouts
+            super()._sample_free(out, k)
+            return
+        step, ptr, h = self._step, self._space_ptr, self._dt
+        get_pos, get_angle, cos, sin = self._get_pos, self._get_angle, math.cos, math.sin
+        bps, repeat = self._body_ptrs, itertools.repeat
+        rows: list[tuple[float, ...]] = []
+        add = rows.append
+        for _ in repeat(None, out.shape[0]):
+            for _ in repeat(None, k):
+                step(ptr, h)
+            for bp in bps:
+                v = get_pos(bp)
+                half = -0.5 * get_angle(bp)  # θ/2 with θ = −angle
+                add((v.x, 0.0, v.y, cos(half), 0.0, sin(half), 0.0))
+        out.reshape(-1, 7)[:] = rows
+
+    def _sample_driven(self, out: np.ndarray, step0: int, k: int, dt: float) -> None:
+        """Like :meth:`_sample_free`, setting the base before every step (as _advance_driven)."""
+        if self._space_ptr is None:  # pragma: no cover - other pymunk layouts
+            super()._sample_driven(out, step0, k, dt)
+            return
+        set_pos, set_vel, bptr = self._set_pos, self._set_vel, self._base_ptr
+        step, ptr, h = self._step, self._space_ptr, self._dt
+        get_pos, get_angle, cos, sin = self._get_pos, self._get_angle, math.cos, math.sin
+        bps = self._body_ptrs
+        m = out.shape[0]
+        n = m * k
+        if step0 + n <= len(self._v_list):
+            us, vs = self._u_list[step0:step0 + n], self._v_list[step0:step0 + n]
+        else:  # steps past the precomputed motion repeat its last, still, value
+            idx = np.minimum(np.arange(step0, step0 + n), self._v_mid.size - 1)
+            us, vs = self._u_start[idx].tolist(), self._v_mid[idx].tolist()
+        rows: list[tuple[float, ...]] = []
+        add = rows.append
+        for j in range(0, n, k):
+            for u, v in zip(us[j:j + k], vs[j:j + k], strict=True):
+                set_pos(bptr, (u, 0.0))
+                set_vel(bptr, (v, 0.0))
+                step(ptr, h)
+            for bp in bps:
+                p = get_pos(bp)
+                half = -0.5 * get_angle(bp)
+                add((p.x, 0.0, p.y, cos(half), 0.0, sin(half), 0.0))
+        out.reshape(-1, 7)[:] = rows
+
     def _fix_base(self) -> bool:
         self._base.position = (float(self._u_start[-1]), 0.0)
         self._base.velocity = (0.0, 0.0)
