@@ -19,9 +19,6 @@ KNOWN_FAILURES: dict[tuple[str, str], str] = {
                                "late on B2 (limit 2 %)",
     ("dem2d", "forced_peak"): "DEM: +24 % peak on the 3 Hz/8 mm pulse (compliance at "
                               "k_n = 1e9 N/m3 plus under-dissipation at the first impact)",
-    ("drake", "mirror_symmetry"): "Drake point contact keeps one point per shape pair, at one "
-                                  "end of the rocking edge: the +/-8 mm pulses differ by "
-                                  "0.02 lambda (limit 0.01) through out-of-plane wobble",
     ("dem2d", "subthreshold"): "DEM soft contact: 0.067 lambda rotation at 0.8 x the uplift "
                                "threshold (elastic-foundation rocking; passes at k_n = 1e11)",
 }

@@ -9,7 +9,10 @@ Scene (a MultibodyPlant + SceneGraph Diagram stepped by a Simulator)
 * Each block is a free body (quaternion floating joint) whose frame is the
   centroid, with the explicit mass and principal inertia of :attr:`Block.inertia`.
   Its collision shape is a ``Box``, or, when chamfered, a ``Convex`` made of the
-  :meth:`Block.profile` polygon extruded along y (an in-memory .obj, no file).
+  :meth:`Block.profile` polygon extruded along y (an in-memory .obj, no file),
+  split along y into ``collision_slices`` equal slices (same x–z profile, depth
+  depth/N each) so that a rocking edge carries N contact points, not one; the
+  inertia is the full block's.
 * The ground is a ``Box`` whose top face is the plane z = 0 (a ``HalfSpace``
   gives a single contact point and +9 % on the first rocking peak). In free
   rocking it is welded to the world. Under base excitation it belongs to a heavy
@@ -32,11 +35,15 @@ Scene (a MultibodyPlant + SceneGraph Diagram stepped by a Simulator)
 * No damping, no sleeping (Drake has neither).
 
 Drake's point contact between two boxes (or a convex prism and a box) yields a
-single contact point per pair, at a corner of the rocking edge; it is the
-contact model the project's issue asks for and it meets the accuracy bounds
-once calibrated. Hydroelastic contact (``contact_model="hydroelastic"``) gives a
-pressure field over the contact patch instead, with compliant blocks of
-``hydroelastic_modulus`` on a rigid ground.
+single contact point per pair, at one end of the rocking edge (y = ±depth/2).
+With one collision shape per block that point flips between the ends of the
+edge: the block wobbles out of plane (up to 0.02 rad), the impact dissipation
+varies by ±0.3 % and mirrored runs differ by 0.02 λ. Slicing the collision
+shape along y gives every slice its own point, so the edge is supported at N
+places symmetric about the mid-plane (4 slices: wobble ≤ 4e-4 rad).
+Hydroelastic contact (``contact_model="hydroelastic"``) gives a pressure field
+over the contact patch instead, with compliant blocks of ``hydroelastic_modulus``
+on a rigid ground.
 """
 
 from __future__ import annotations
@@ -89,9 +96,10 @@ class DrakeSettings(EngineSettings):
         (a pressure field over the patch; blocks compliant, ground rigid).
     static_penetration : float or None
         Sets the point-contact stiffness from the penetration in m under the
-        whole stack's weight W on one contact: each geometry gets
-        ``material/point_contact_stiffness`` = 2W/δ (two equal springs in series
-        give W/δ). Scaling with the weight keeps the contact time scale
+        whole stack's weight W on one rocking edge: each geometry gets
+        ``material/point_contact_stiffness`` = 2W/(Nδ) with N =
+        ``collision_slices`` (two equal springs in series give W/δ over the N
+        contacts of a rocking edge). Scaling with the weight keeps the contact time scale
         sqrt(δ/g) the same for every block. Ignored if ``point_stiffness`` is set.
     point_stiffness : float or None
         Absolute point-contact stiffness in N/m of every geometry (overrides
@@ -121,20 +129,29 @@ class DrakeSettings(EngineSettings):
         Where in the step [t, t + dt] the driven base's velocity is sampled
         (0 = start, 0.5 = middle, 1 = end); 0.5 pairs the imposed acceleration
         with the blocks' positions as in leapfrog integration.
+    collision_slices : int
+        Number of equal slices along y (depth/N each, same x–z profile) of each
+        block's collision shape. Point contact keeps one contact point per pair
+        of shapes, so N slices give a rocking edge N points instead of one
+        (1 reproduces the single-shape model and its out-of-plane wobble).
+        ``static_penetration`` shares the weight among the N contacts.
 
     Notes
     -----
-    Calibrated with ``benchmarks/calibrate_drake.py`` (free rocking B0–B3, six
-    sine pulses). ``accurate`` (SAP, dt 0.25 ms): 0.0017–0.0079 λ over 20 s (B0,
-    B1-0.99, B2-0.99 exceed the project's 5e-3 λ), impact times within 0.55 %,
-    pulse peaks within 0.53 %. ``fast`` (TAMSI, dt 0.5 ms): ≤ 0.025 λ, pulse peaks
-    within 1.05 %. The residual error is noise from the single contact point that
-    Drake's point contact puts at one corner of the rocking edge (it flips between
-    the two ends of the edge, giving out-of-plane wobble of up to 0.02 rad on the
-    small blocks); smaller steps or stiffer contacts do not remove it. The near-rigid
-    regime of SAP caps the stiffness, so ``static_penetration`` below ~1e-4 m
-    changes nothing for these blocks; it matters for heavy blocks, which Drake's
-    own estimate (``penetration_allowance``) lets sink by millimetres.
+    Calibrated with ``benchmarks/calibrate_drake.py`` (free rocking B0–B3 over
+    20 s, six Single #2 sine pulses), 4 collision slices. ``accurate`` (SAP,
+    dt 0.25 ms): 0.0003–0.0028 λ, impact times within 0.18 %, pulse peaks within
+    0.55 %, out-of-plane wobble ≤ 4e-4 rad. ``fast`` (TAMSI, dt 0.5 ms, 2
+    slices): ≤ 0.013 λ, impact times within 0.30 %, pulse peaks within 1.74 %,
+    wobble ≤ 0.016 rad; with 4 slices TAMSI's mirrored pulses differ by 0.035 λ
+    (the conformance limit is 0.01 λ; 2 slices: 0.0075 λ). SAP at
+    dt 1 ms costs ~1.5x TAMSI at 0.5 ms and misses the pulse bound (+3.3 % on
+    3.3 Hz / 6 mm), so ``fast`` keeps TAMSI while Drake ships it. With 2 slices
+    the accurate errors are ≤ 0.0029 λ but the wobble reaches 0.012 rad; with 1
+    slice (the single-shape model) B0, B1-0.99 and B2-0.99 miss 5e-3 λ. The
+    near-rigid regime of SAP caps the stiffness, so ``static_penetration`` below
+    ~1e-4 m changes nothing for these blocks; it matters for heavy blocks, which
+    Drake's own estimate (``penetration_allowance``) lets sink by millimetres.
     """
 
     timestep: float = 2.5e-4
@@ -150,6 +167,7 @@ class DrakeSettings(EngineSettings):
     hydroelastic_modulus: float = 1.0e9
     hydroelastic_resolution: float = 0.05
     base_velocity_phase: float = 0.5
+    collision_slices: int = 4
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.timestep) and self.timestep > 0):
@@ -169,6 +187,10 @@ class DrakeSettings(EngineSettings):
         if not self.near_rigid_threshold >= 0:
             raise ValueError(f"near_rigid_threshold must be >= 0, got "
                              f"{self.near_rigid_threshold!r}")
+        if isinstance(self.collision_slices, bool) or not (
+                isinstance(self.collision_slices, int) and self.collision_slices >= 1):
+            raise ValueError(f"collision_slices must be an integer >= 1, got "
+                             f"{self.collision_slices!r}")
         if not 0.0 <= self.base_velocity_phase <= 1.0:
             raise ValueError(f"base_velocity_phase must be in [0, 1], got "
                              f"{self.base_velocity_phase!r}")
@@ -198,8 +220,9 @@ class DrakeEngine(Engine):
     Settings: ClassVar[type[EngineSettings]] = DrakeSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
-        # TAMSI is ~4x cheaper per step than SAP; at 1 ms one pulse peak was off by 2.0 %
-        "fast": {"timestep": 5.0e-4, "contact_approximation": "tamsi"},
+        # TAMSI is ~4x cheaper per step than SAP; SAP at 1 ms: +3.3 % on a pulse peak.
+        # TAMSI with 4 slices: mirrored 3 Hz / ±8 mm pulses differ by 0.035 λ; 2: 0.0075 λ
+        "fast": {"timestep": 5.0e-4, "contact_approximation": "tamsi", "collision_slices": 2},
     }
     install_hint: ClassVar[str] = "pip install drake"
 
@@ -283,8 +306,10 @@ class DrakeEngine(Engine):
         plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, -scenario.g])
         mu = scenario.contact.friction
         k = s.point_stiffness
+        n_sl = s.collision_slices
         if k is None and s.static_penetration is not None:
-            k = 2.0 * sum(b.m for b in blocks) * scenario.g / s.static_penetration
+            # the weight is shared by the n_sl slices' contacts along the rocking edge
+            k = 2.0 * sum(b.m for b in blocks) * scenario.g / (n_sl * s.static_penetration)
         p_block = self._proximity(s, mu, k, compliant=True)
         p_ground = self._proximity(s, mu, k, compliant=False)
         bodies = []
@@ -292,12 +317,17 @@ class DrakeEngine(Engine):
             inertia = np.asarray(blk.inertia, float) / blk.m
             body = plant.AddRigidBody(
                 f"block{i}", SpatialInertia(blk.m, np.zeros(3), UnitInertia(*inertia)))
+            # n_sl slices along y, each with one contact point per pair of shapes
+            d = blk.depth / n_sl
             if blk.chamfer > 0:
-                obj = MemoryFile(prism_obj(blk.profile(), blk.depth), ".obj", f"prism{i}.obj")
+                obj = MemoryFile(prism_obj(blk.profile(), d), ".obj", f"prism{i}.obj")
                 shape = Convex(InMemoryMesh(mesh_file=obj))
             else:
-                shape = Box(blk.width, blk.depth, blk.height)
-            plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"geom{i}", p_block)
+                shape = Box(blk.width, d, blk.height)
+            for j in range(n_sl):
+                y = (j + 0.5) * d - 0.5 * blk.depth
+                plant.RegisterCollisionGeometry(body, RigidTransform([0.0, y, 0.0]), shape,
+                                                f"geom{i}_{j}", p_block)
             bodies.append(body)
         # a ground large enough for the stack, its tilt and the base travel
         ext = scenario.stack.total_height + max(b.width for b in blocks)
