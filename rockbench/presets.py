@@ -19,7 +19,6 @@ settings file, then ``--set`` options. ``rockbench tune`` writes such files.
 from __future__ import annotations
 
 import argparse
-import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -27,11 +26,7 @@ from typing import Any
 import tomli_w
 
 from rockbench.engines import SettingsError
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from rockbench.tomlfile import read_toml
 
 __all__ = ["load_settings_file", "write_settings_file", "add_settings_file_argument",
            "settings_with_file", "typed_settings"]
@@ -46,12 +41,7 @@ def load_settings_file(path: str | Path) -> dict[str, dict[str, Any]]:
         Unreadable file, malformed TOML, or a top-level value that is not a table.
     """
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except OSError as exc:
-        raise SettingsError(f"{path}: cannot read settings file ({exc.strerror})") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SettingsError(f"{path}: malformed TOML ({exc})") from None
+    data = read_toml(path, SettingsError, "settings file")
     out: dict[str, dict[str, Any]] = {}
     for engine, table in data.items():
         if not isinstance(table, Mapping):

@@ -8,18 +8,13 @@ No rockbench result is ever computed from them.
 from __future__ import annotations
 
 import re
-import sys
 from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
 from typing import Any
 
 from rockbench.scenarios import Scenario
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from rockbench.tomlfile import loads
 
 __all__ = ["PaperTable", "paper_data", "citation", "paper_tables", "case_key",
            "paper_runtimes", "paper_summary", "is_catalog_case"]
@@ -76,7 +71,7 @@ def paper_data() -> dict[str, Any]:
     """The parsed data file (tables, summaries, run times, citation)."""
     text = resources.files("rockbench.report").joinpath("data/paper_tables.toml").read_text(
         encoding="utf-8")
-    return tomllib.loads(text)
+    return loads(text)
 
 
 def citation() -> str:

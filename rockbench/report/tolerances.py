@@ -41,19 +41,14 @@ from __future__ import annotations
 
 import fnmatch
 import math
-import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from rockbench.errors import RockbenchError
+from rockbench.tomlfile import read_toml
 from rockbench.trajectory import Status
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["Tolerances", "ToleranceError", "METRICS", "STATUS_RULES", "load_tolerances",
            "shipped_tolerances", "DEFAULT_REGRESSION"]
@@ -276,12 +271,5 @@ def load_tolerances(path: str | Path) -> Tolerances:
     path = Path(path)
     if not path.exists() and path.suffix != ".toml":
         path = shipped_tolerances(str(path)) or path
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise ToleranceError(f"{path}: cannot read tolerance file ({exc.strerror})") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ToleranceError(f"{path}: malformed TOML ({exc})") from None
+    data = read_toml(path, ToleranceError, "tolerance file")
     return Tolerances.from_dict(data, str(path))

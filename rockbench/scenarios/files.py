@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -19,11 +18,7 @@ from rockbench.scenarios.excitation import (
     Sinusoid,
 )
 from rockbench.scenarios.model import Block, Contact, Scenario, Stack
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - Python 3.10
-    import tomli as tomllib
+from rockbench.tomlfile import read_toml
 
 __all__ = ["load_scenario", "save_scenario", "scenario_from_dict", "scenario_to_dict"]
 
@@ -202,12 +197,7 @@ def load_scenario(path: str | Path) -> Scenario:
         message starts with the file name.
     """
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except OSError as exc:
-        raise ScenarioError(f"{path}: cannot read ({exc.strerror})") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: malformed TOML ({exc})") from None
+    data = read_toml(path, ScenarioError, "scenario file")
     try:
         return scenario_from_dict(data, base_dir=path.parent, default_name=path.stem)
     except ScenarioError as exc:
