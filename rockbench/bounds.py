@@ -101,6 +101,11 @@ class SpeedBound:
         return None
 
 
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    """Angles wrapped to [-π, π) (a rotation increment, not an absolute angle)."""
+    return np.remainder(angle + math.pi, 2.0 * math.pi) - math.pi
+
+
 class SpeedWatch:
     """Speed check for an engine's watchdog, one sample or one chunk of samples at a time.
 
@@ -152,14 +157,14 @@ class SpeedWatch:
         dt = np.diff(t)
         with np.errstate(invalid="ignore", divide="ignore"):
             speed = np.hypot(*np.moveaxis(np.diff(xz, axis=0), -1, 0)) / dt[:, None]
-            spin = np.abs(np.angle(np.exp(1j * np.diff(theta, axis=0)))) / dt[:, None]
+            spin = np.abs(_wrap(np.diff(theta, axis=0))) / dt[:, None]
             fast = (np.any(speed > self.bound.v_max, axis=1)
                     | np.any(spin > self.bound.omega_max, axis=1))
         if not fast.any():
             return None
         j = int(np.argmax(fast))
         msg = self.bound.violation(float(dt[j]), xz[j + 1] - xz[j],
-                                   np.angle(np.exp(1j * (theta[j + 1] - theta[j]))))
+                                   _wrap(theta[j + 1] - theta[j]))
         return j + 1 - shift, msg or "explosion: non-physical speed"
 
     def check(self, t: float, xz: np.ndarray, theta: np.ndarray) -> str | None:
