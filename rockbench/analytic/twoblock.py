@@ -25,6 +25,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 import rockbench
+from rockbench.analytic.housner import scalar_acceleration
 from rockbench.analytic.twoblock_model import (
     BlockParams,
     Pattern,
@@ -32,7 +33,7 @@ from rockbench.analytic.twoblock_model import (
     parse_pattern,
 )
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import Excitation, Free, Scenario, SinePulse, Sinusoid
+from rockbench.scenarios import Excitation, Scenario
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = [
@@ -537,47 +538,8 @@ class _ScalarAccel:
 
 
 def _fast_accel(exc: Excitation) -> _ScalarAccel:
-    scalar: Callable[[float], float] | None = None
-    if isinstance(exc, Free):
-        def scalar(t: float) -> float:
-            return 0.0
-    elif isinstance(exc, SinePulse):
-        amp = float(exc.amplitude) * exc.omega**2
-        om, te = exc.omega, exc.end_time
-
-        def scalar(t: float) -> float:
-            return amp * math.sin(om * t) if 0.0 <= t <= te else 0.0
-    elif isinstance(exc, Sinusoid):
-        amp, om, tr, te = float(exc.amplitude), exc.omega, exc.ramp_time, exc.end_time
-        has_dur = exc.duration is not None
-        kk = math.pi / tr if tr > 0 else 0.0
-
-        def scalar(t: float) -> float:
-            if t < 0 or t > te:
-                return 0.0
-            w, dw, ddw = 1.0, 0.0, 0.0
-            if tr > 0:
-                if has_dur and t > te - tr:
-                    s, sign = te - t, -1.0
-                elif t < tr:
-                    s, sign = t, 1.0
-                else:
-                    s = -1.0
-                if s >= 0:
-                    w = 0.5 * (1 - math.cos(kk * s))
-                    dw = sign * 0.5 * kk * math.sin(kk * s)
-                    ddw = 0.5 * kk * kk * math.cos(kk * s)
-            sn, cs = math.sin(om * t), math.cos(om * t)
-            return amp * (-om * om * sn * w + 2 * om * cs * dw + sn * ddw)
-    fa = _ScalarAccel(exc, scalar)
-    if scalar is not None:  # guard against any drift from the vectorised definition
-        span = exc.end_time if math.isfinite(exc.end_time) else 10.0
-        ts = np.linspace(-0.01, span * 1.01 + 0.01, 2003)
-        ref = np.asarray(exc.acceleration(ts), float)
-        mine = np.array([scalar(float(x)) for x in ts])
-        if not np.allclose(mine, ref, rtol=1e-12, atol=1e-12 * (np.max(np.abs(ref)) + 1.0)):
-            fa.scalar = None
-    return fa
+    # the single-block solver's checked plain-math copies of the excitations
+    return _ScalarAccel(exc, scalar_acceleration(exc))
 
 
 def two_block_reference(scenario: Scenario) -> Trajectory:
