@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from rockbench.analytic.housner import single_block_reference
+from rockbench.metrics import zero_crossings
 from rockbench.scenarios import Scenario, get_scenario
 from rockbench.scenarios.catalog import FREE_BLOCKS, FREE_TILTS, SINGLE_CASES
 
@@ -54,13 +55,6 @@ def select(cases: Iterable[Scenario], patterns: str) -> list[Scenario]:
 
 
 # ---------------------------------------------------------------------- measurements
-def zero_crossings(t: np.ndarray, th: np.ndarray) -> np.ndarray:
-    """Times where θ changes sign (linear interpolation)."""
-    s = np.sign(th)
-    i = np.nonzero(s[:-1] * s[1:] < 0)[0]
-    return t[i] - th[i] * (t[i + 1] - t[i]) / (th[i + 1] - th[i])
-
-
 def _simulate(engine: Any, settings: object, scenario: Scenario) -> tuple[Any, float]:
     c0 = time.process_time()
     tr = engine.simulate(scenario, settings)

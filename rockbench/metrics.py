@@ -11,8 +11,8 @@ import numpy as np
 
 from rockbench.trajectory import Trajectory
 
-__all__ = ["peak_ratio", "impact_times", "max_error", "impact_time_errors", "time_to_rest",
-           "peak_relative_error"]
+__all__ = ["peak_ratio", "zero_crossings", "impact_times", "max_error", "impact_time_errors",
+           "time_to_rest", "peak_relative_error"]
 
 
 def peak_ratio(traj: Trajectory, lam: float) -> np.ndarray:
@@ -20,6 +20,25 @@ def peak_ratio(traj: Trajectory, lam: float) -> np.ndarray:
     if traj.t.size == 0:
         return np.full(traj.n_blocks, np.nan)
     return np.max(np.abs(traj.theta), axis=0) / lam
+
+
+def zero_crossings(t: np.ndarray, theta: np.ndarray,
+                   level: float = 0.0) -> np.ndarray:
+    """Times where ``theta`` changes sign, linearly interpolated between samples.
+
+    With ``level`` > 0 a crossing counts only if |θ| reached ``level`` since the
+    previous counted crossing (or the start): contact jitter around θ = 0
+    before uplift is not an impact.
+    """
+    idx = np.nonzero(np.sign(theta[:-1]) * np.sign(theta[1:]) < 0)[0]
+    if level > 0.0:
+        keep, last = [], 0
+        for i in idx:
+            if np.max(np.abs(theta[last:i + 1])) >= level:
+                keep.append(i)
+                last = i + 1
+        idx = np.asarray(keep, dtype=int)
+    return t[idx] - theta[idx] * (t[idx + 1] - t[idx]) / (theta[idx + 1] - theta[idx])
 
 
 def impact_times(traj: Trajectory, block: int = 0) -> np.ndarray:
@@ -30,10 +49,7 @@ def impact_times(traj: Trajectory, block: int = 0) -> np.ndarray:
     """
     if traj.impacts is not None and traj.n_blocks == 1 and block == 0:
         return np.asarray(traj.impacts, float)
-    th = traj.theta[:, block]
-    t = traj.t
-    idx = np.nonzero(np.sign(th[:-1]) * np.sign(th[1:]) < 0)[0]
-    return t[idx] - th[idx] * (t[idx + 1] - t[idx]) / (th[idx + 1] - th[idx])
+    return zero_crossings(traj.t, traj.theta[:, block])
 
 
 def max_error(traj: Trajectory, ref: Trajectory, lam: float, t_end: float | None = None) -> float:

@@ -94,18 +94,7 @@ def rocking_impacts(traj: Trajectory, lam: float, threshold: float = IMPACT_THRE
     since the previous counted crossing (or the start). Times are linearly
     interpolated between samples, the same way for engines and references.
     """
-    th = traj.theta[:, block]
-    t = traj.t
-    if th.size < 2:
-        return np.zeros(0)
-    idx = np.nonzero(np.sign(th[:-1]) * np.sign(th[1:]) < 0)[0]
-    out, last = [], 0
-    level = threshold * lam
-    for i in idx:
-        if np.max(np.abs(th[last:i + 1])) >= level:
-            out.append(t[i] - th[i] * (t[i + 1] - t[i]) / (th[i + 1] - th[i]))
-            last = i + 1
-    return np.asarray(out, float)
+    return metrics.zero_crossings(traj.t, traj.theta[:, block], threshold * lam)
 
 
 def run_metrics(traj: Trajectory, ref: Trajectory | None, scenario: Scenario) -> dict[str, Any]:
