@@ -17,7 +17,6 @@ __all__ = ["configure_matrix", "execute_matrix", "configure_history", "execute_h
 def add_run_arguments(p: argparse.ArgumentParser, *, timeout: float | None = 600.0) -> None:
     """Options shared by matrix, sweep and tune: store, parallelism, time limit, executor."""
     from rockbench.presets import add_settings_file_argument
-    from rockbench.runner import EXECUTORS, default_jobs
     from rockbench.store import DEFAULT_DB
 
     add_settings_file_argument(p)
@@ -25,6 +24,13 @@ def add_run_arguments(p: argparse.ArgumentParser, *, timeout: float | None = 600
                    help=f"results store (SQLite), appended as each run finishes "
                         f"(default: ./{DEFAULT_DB})")
     p.add_argument("--no-db", action="store_true", help="do not write the results store")
+    add_parallel_arguments(p, timeout=timeout)
+
+
+def add_parallel_arguments(p: argparse.ArgumentParser, *, timeout: float | None) -> None:
+    """Parallelism, time limit and executor options of every command that runs engines."""
+    from rockbench.runner import EXECUTORS, default_jobs
+
     p.add_argument("--jobs", "-j", type=int, default=default_jobs(), metavar="N",
                    help="parallel engine runs (default: the machine's cores, "
                         f"{default_jobs()} here)")

@@ -20,7 +20,7 @@ import numpy as np
 
 from rockbench.cli import Progress, add_engine_arguments, engine_settings
 from rockbench.errors import RockbenchError
-from rockbench.runner import EXECUTORS, default_jobs
+from rockbench.report.matrix_command import add_parallel_arguments
 
 __all__ = ["configure", "execute"]
 
@@ -64,15 +64,7 @@ def configure(p: argparse.ArgumentParser) -> None:
                    help="engine runs last the pulse plus K/p seconds (default: 4)")
     p.add_argument("--out", "-o", default="spectrum-out", metavar="DIR",
                    help="output directory (default: spectrum-out)")
-    p.add_argument("--jobs", "-j", type=int, default=default_jobs(), metavar="N",
-                   help=f"parallel processes (default: {default_jobs()})")
-    p.add_argument("--timeout", type=float, default=300.0, metavar="S",
-                   help="wall-time limit per engine run (default: 300)")
-    p.add_argument("--executor", choices=EXECUTORS, default="process",
-                   help="local process pool or a Dask cluster (default: process)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="Dask scheduler address (with --executor dask; default: a local "
-                        "cluster)")
+    add_parallel_arguments(p, timeout=300.0)
 
 
 def execute(args: argparse.Namespace) -> int:
