@@ -28,7 +28,7 @@ import numpy as np
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["SpeedBound", "SpeedWatch", "check_trajectory", "SAFETY_FACTOR"]
+__all__ = ["SpeedBound", "SpeedWatch", "check_trajectory", "peak_base_motion", "SAFETY_FACTOR"]
 
 #: Safety factor on the energy bound (an exploding solver is orders of magnitude off).
 SAFETY_FACTOR = 3.0
@@ -52,7 +52,8 @@ class SpeedBound:
     omega_max: float
 
     @classmethod
-    def for_scenario(cls, scenario: Scenario, factor: float = SAFETY_FACTOR) -> SpeedBound:
+    def for_scenario(cls, scenario: Scenario, factor: float = SAFETY_FACTOR,
+                     v_base: float | None = None) -> SpeedBound:
         """The bound derived from the stack height and the peak base speed.
 
         Parameters
@@ -61,14 +62,12 @@ class SpeedBound:
             The simulated problem.
         factor : float
             Safety factor on the energy bound.
+        v_base : float, optional
+            Peak base speed (m/s) when the caller has it; sampled otherwise.
         """
         height = scenario.stack.total_height
-        exc = scenario.excitation
-        v_base = 0.0
-        if not exc.is_free:
-            t_end = min(scenario.duration, max(exc.end_time, 0.0))
-            t = np.linspace(0.0, t_end, 801)  # ~16 samples per cycle at 5 Hz over 10 s
-            v_base = float(np.max(np.abs(exc.velocity(t))))
+        if v_base is None:
+            v_base = peak_base_motion(scenario)[1]
         v_max = factor * (math.sqrt(2.0 * scenario.g * height) + 2.0 * v_base) + SPEED_FLOOR
         k_min = min(math.sqrt(b.inertia[1] / b.m) for b in scenario.blocks)
         return cls(v_max=v_max, omega_max=v_max / k_min)
@@ -106,6 +105,15 @@ def _wrap(angle: np.ndarray) -> np.ndarray:
     return np.remainder(angle + math.pi, 2.0 * math.pi) - math.pi
 
 
+def peak_base_motion(scenario: Scenario) -> tuple[float, float]:
+    """Peak |u_g| and |u̇_g| over the scenario (sampled, ~16 points per cycle at 5 Hz / 10 s)."""
+    exc = scenario.excitation
+    if exc.is_free:
+        return 0.0, 0.0
+    t = np.linspace(0.0, min(scenario.duration, max(exc.end_time, 0.0)), 801)
+    return float(np.max(np.abs(exc.displacement(t)))), float(np.max(np.abs(exc.velocity(t))))
+
+
 class SpeedWatch:
     """Speed check for an engine's watchdog, one sample or one chunk of samples at a time.
 
@@ -116,10 +124,12 @@ class SpeedWatch:
     ----------
     scenario : Scenario
         The simulated problem (gives the bound).
+    bound : SpeedBound, optional
+        The bound, when the caller has already derived it.
     """
 
-    def __init__(self, scenario: Scenario) -> None:
-        self.bound = SpeedBound.for_scenario(scenario)
+    def __init__(self, scenario: Scenario, bound: SpeedBound | None = None) -> None:
+        self.bound = bound if bound is not None else SpeedBound.for_scenario(scenario)
         self._prev: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def check_chunk(self, t: np.ndarray, xz: np.ndarray,

@@ -47,7 +47,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from rockbench.bounds import SpeedWatch
+from rockbench.bounds import SpeedBound, SpeedWatch, peak_base_motion
 from rockbench.engines.settings import EngineSettings, SettingsError
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import Scenario
@@ -339,8 +339,7 @@ class _Watchdog:
         self.masses = np.array([b.m for b in scenario.blocks])
         height = scenario.stack.total_height
         exc = scenario.excitation
-        t = np.linspace(0.0, min(scenario.duration, max(exc.end_time, 0.0)), 801)
-        u_base = float(np.max(np.abs(exc.displacement(t)))) if t[-1] > 0 else 0.0
+        u_base, v_base = peak_base_motion(scenario)
         # a falling block cannot leave a ball of a few stack heights around its start
         self.reach = 3.0 * height + 2.0 * u_base + 1.0
         c, _ = scenario.initial_poses()
@@ -352,7 +351,7 @@ class _Watchdog:
         # the contact penetration noise of a soft engine
         self.z_limit = mgz0 + 0.02 * abs(mgz0 - mgz_up) + 1e-4 * self.masses.sum() * height
         self.chunk = max(1, int(self.PERIOD * scenario.output_rate))
-        self.speed = SpeedWatch(scenario)
+        self.speed = SpeedWatch(scenario, SpeedBound.for_scenario(scenario, v_base=v_base))
 
     def check(self, poses: np.ndarray, t: np.ndarray) -> tuple[int, tuple[Status, str]] | None:
         """First failing sample of a chunk (index within the chunk, verdict), or None."""
