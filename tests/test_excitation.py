@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rockbench.errors import ScenarioError
-from rockbench.scenarios import Free, Record, SinePulse, Sinusoid
+from rockbench.scenarios import CosinePulse, Free, Record, SinePulse, Sinusoid
 
 EXCITATIONS = [
     SinePulse(3.0, 0.008),
@@ -15,6 +15,11 @@ EXCITATIONS = [
     Sinusoid(2.0, 0.01, duration=3.2, ramp_cycles=1.5),
     Record(np.linspace(0.0, 2.0, 401), 3.0 * np.sin(9.0 * np.linspace(0.0, 2.0, 401)) + 0.4),
 ]
+
+
+BOUNDED = [*EXCITATIONS, CosinePulse(2.0, 0.01), CosinePulse(4.0, -0.003, cycles=3),
+           Sinusoid(2.0, 0.01, duration=5.0, ramp_cycles=0.1),
+           Sinusoid(2.0, 0.01, duration=5.0, ramp_cycles=0.3), Free()]
 
 
 def _rel_max(a, b):
@@ -119,3 +124,29 @@ def test_invalid_excitations(make):
 def test_free_is_still():
     assert Free().is_free
     assert np.all(Free().displacement(np.linspace(0, 3, 5)) == 0)
+
+
+@pytest.mark.parametrize("exc", BOUNDED, ids=lambda e: type(e).__name__)
+@pytest.mark.parametrize("t_end", [0.02, 0.13, 0.3, 1.0, 20.0])
+def test_motion_bounds_hold_between_samples_too(exc, t_end):
+    t = np.linspace(0.0, t_end, 400_001)
+    u, v = np.max(np.abs(exc.displacement(t))), np.max(np.abs(exc.velocity(t)))
+    ub, vb = exc.motion_bounds(t_end)
+    assert ub >= u * (1 - 1e-12) and vb >= v * (1 - 1e-12)
+    if isinstance(exc, SinePulse | CosinePulse):  # closed forms: the peaks themselves
+        assert (ub, vb) == pytest.approx((u, v), rel=1e-7, abs=1e-15)  # sampling error
+
+
+def test_motion_bounds_are_the_peaks_over_a_whole_motion():
+    a, f = 0.006, 5.0
+    w = 2 * math.pi * f
+    assert SinePulse(f, a).motion_bounds() == pytest.approx((2 * math.pi * a, 2 * a * w))
+    # a sinusoid whose ramps last ≥ 0.35 cycles never outpaces its steady amplitude A ω
+    for rc in (0.36, 1.0, 3.0):
+        assert Sinusoid(f, a, duration=10.0, ramp_cycles=rc).motion_bounds(10.0) == \
+            pytest.approx((a, a * w), rel=1e-12)
+    rec = EXCITATIONS[-1]
+    t = np.linspace(0.0, 2.0, 400_001)
+    assert rec.motion_bounds() == pytest.approx(
+        (np.max(np.abs(rec.displacement(t))), np.max(np.abs(rec.velocity(t)))), rel=0.01)
+    assert Free().motion_bounds() == (0.0, 0.0)

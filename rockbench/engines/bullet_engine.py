@@ -234,10 +234,7 @@ class BulletEngine(Engine):
         blocks = scenario.blocks
         height = scenario.stack.total_height
         exc = scenario.excitation
-        reach = max(b.b for b in blocks) + height
-        if not exc.is_free:
-            t = np.linspace(0.0, min(scenario.duration, exc.end_time), 4001)
-            reach += float(np.max(np.abs(exc.displacement(t))))
+        reach = max(b.b for b in blocks) + height + exc.motion_bounds(scenario.duration)[0]
         ground_half = (max(1.0, 2.0 * reach), max(1.0, 2.0 * reach, max(b.depth for b in blocks)),
                        0.5)
         self._ground_z = -ground_half[2]

@@ -213,9 +213,7 @@ class DartEngine(Engine):
         # base: a box (top face z = 0) on a prismatic joint along x, driven kinematically
         exc = scenario.excitation
         t_move = min(scenario.duration, exc.end_time) if not exc.is_free else 0.0
-        u_max = 0.0
-        if t_move > 0:
-            u_max = float(np.max(np.abs(exc.displacement(np.linspace(0.0, t_move, 4001)))))
+        u_max = exc.motion_bounds(scenario.duration)[0]
         span = 4.0 * (scenario.stack.total_height + max(b.width for b in scenario.blocks))
         span += 2.0 * u_max + float(np.max(np.abs(scenario.stack.offsets)))
         depth = 4.0 * max(b.depth for b in scenario.blocks) + span

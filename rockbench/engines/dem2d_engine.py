@@ -212,9 +212,7 @@ class Dem2dEngine(Engine):
         h_tot = scenario.stack.total_height
         w_max = max(b.width for b in blocks)
         t_end = min(exc.end_time, scenario.duration) if not exc.is_free else 0.0
-        u_max = 0.0
-        if t_end > 0:
-            u_max = float(np.max(np.abs(exc.displacement(np.linspace(0, t_end, 2001)))))
+        u_max = exc.motion_bounds(scenario.duration)[0]
         # base: a box whose top face is z = 0, wide enough for a toppled stack
         half = 2.0 * (h_tot + w_max) + u_max + 1.0
         thick = max(1.0, 0.5 * h_tot)

@@ -246,14 +246,6 @@ class DrakeEngine(Engine):
                 f"plastic); restitution {scenario.contact.restitution} cannot be modelled"
             )
 
-    @staticmethod
-    def _base_travel(scenario: Scenario) -> float:
-        exc = scenario.excitation
-        if exc.is_free:
-            return 0.0
-        t = np.linspace(0.0, min(scenario.duration, exc.end_time), 4001)
-        return float(np.max(np.abs(exc.displacement(t))))
-
     def _proximity(self, s: DrakeSettings, friction: float, stiffness: float | None,
                    compliant: bool) -> Any:
         """Proximity properties shared by every geometry (blocks and ground)."""
@@ -331,7 +323,7 @@ class DrakeEngine(Engine):
             bodies.append(body)
         # a ground large enough for the stack, its tilt and the base travel
         ext = scenario.stack.total_height + max(b.width for b in blocks)
-        lx = 2.0 * (2.0 * ext + 2.0 * self._base_travel(scenario) + 1.0)
+        lx = 2.0 * (2.0 * ext + 2.0 * scenario.excitation.motion_bounds(scenario.duration)[0] + 1.0)
         ly = 2.0 * (2.0 * max(b.depth for b in blocks) + 0.5)
         lz = 2.0 * (0.25 * ext + 0.1)
         ground = Box(lx, ly, lz)

@@ -196,7 +196,7 @@ class MujocoEngine(Engine):
         mass_total = sum(b.m for b in blocks)
         # a base large enough for the stack, its tilt and the base travel
         ext = scenario.stack.total_height + max(b.width for b in blocks)
-        hx = 2.0 * ext + 2.0 * self._base_travel(scenario) + 1.0
+        hx = 2.0 * ext + 2.0 * scenario.excitation.motion_bounds(scenario.duration)[0] + 1.0
         hy = 2.0 * max(b.depth for b in blocks) + 0.5
         hz = 0.25 * ext + 0.1
         flags = "" if s.multiccd else ' multiccd="disable"'
@@ -238,15 +238,6 @@ class MujocoEngine(Engine):
             f'<asset>{"".join(assets)}</asset>'
             f'<worldbody>{"".join(bodies)}{base}</worldbody></mujoco>'
         )
-
-    @staticmethod
-    def _base_travel(scenario: Scenario) -> float:
-        exc = scenario.excitation
-        if exc.is_free:
-            return 0.0
-        t_end = min(scenario.duration, exc.end_time)
-        t = np.linspace(0.0, t_end, 4001)
-        return float(np.max(np.abs(exc.displacement(t))))
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
         import mujoco

@@ -80,6 +80,22 @@ class Excitation(ABC):
         t = np.linspace(0.0, t_end, 20001)
         return float(np.max(np.abs(self.acceleration(t))))
 
+    def motion_bounds(self, t_end: float = math.inf) -> tuple[float, float]:
+        """Upper bounds on |u_g| and |u̇_g| over [0, t_end] (m, m/s).
+
+        What a scene needs to size its ground and what the engine watchdog
+        needs to bound speeds. Built-in excitations give them in closed form
+        (exact for pulses); this default samples the motion finely.
+        """
+        t_end = min(t_end, self.end_time)
+        if t_end <= 0:
+            return 0.0, 0.0
+        if not math.isfinite(t_end):
+            raise ValueError(f"{type(self).__name__} never ends: give a finite t_end")
+        t = np.linspace(0.0, t_end, 20001)
+        return (float(np.max(np.abs(self.displacement(t)))),
+                float(np.max(np.abs(self.velocity(t)))))
+
     @abstractmethod
     def to_dict(self) -> dict[str, Any]:
         """Scenario-file representation (``type`` plus fields)."""
@@ -150,6 +166,10 @@ class _Pulse(Excitation):
     def peak_acceleration(self, t_end: float = math.inf) -> float:
         return abs(self.amplitude) * self.omega**2 if t_end >= 0 else 0.0
 
+    def _phase(self, t_end: float) -> float:
+        """ω · min(t_end, end of the pulse), at least 0: the pulse phase reached by t_end."""
+        return self.omega * min(max(t_end, 0.0), self.end_time)
+
     @property
     def acceleration_amplitude(self) -> float:
         """Signed acceleration amplitude a_p = A ω² (m/s²)."""
@@ -213,6 +233,12 @@ class SinePulse(_Pulse):
         # after the pulse the base is at rest (velocity 0), so u stays constant
         return np.where(t < 0, 0.0, self.amplitude * (w * tc - np.sin(w * tc)))
 
+    def motion_bounds(self, t_end: float = math.inf) -> tuple[float, float]:
+        """Exact peaks: u_g grows monotonically; u̇_g peaks at 2Aω each half cycle."""
+        ph, a = self._phase(t_end), abs(self.amplitude)
+        return a * (ph - math.sin(ph)), a * self.omega * (2.0 if ph >= math.pi else
+                                                           1.0 - math.cos(ph))
+
 
 @dataclass(frozen=True)
 class CosinePulse(_Pulse):
@@ -250,6 +276,12 @@ class CosinePulse(_Pulse):
         t = np.asarray(t, float)
         w = self.omega
         return np.where(self._inside(t), self.amplitude * (1.0 - np.cos(w * t)), 0.0)
+
+    def motion_bounds(self, t_end: float = math.inf) -> tuple[float, float]:
+        """Exact peaks: 2A at each half cycle, Aω at each quarter cycle."""
+        ph, a = self._phase(t_end), abs(self.amplitude)
+        return (a * (2.0 if ph >= math.pi else 1.0 - math.cos(ph)),
+                a * self.omega * (1.0 if ph >= 0.5 * math.pi else math.sin(ph)))
 
 
 @dataclass(frozen=True)
@@ -347,6 +379,22 @@ class Sinusoid(Excitation):
         om = self.omega
         s, c = np.sin(om * t), np.cos(om * t)
         return self.amplitude * (-om * om * s * w + 2 * om * c * dw + s * ddw)
+
+    def motion_bounds(self, t_end: float = math.inf) -> tuple[float, float]:
+        """|u_g| ≤ A, and |u̇_g| ≤ A ω unless the ramps are shorter than 0.35 cycles.
+
+        u̇_g = A (ω cos ωt · w + sin ωt · w'), so |u̇_g| ≤ A sqrt(ω² w² + w'²).
+        On a ramp w = (1 − cos ks)/2 and |w'| = (k/2) sin ks with k = π/t_ramp;
+        in y = 1 − cos ks ∈ [0, 2] the square root's argument is
+        (ω² − k²) y²/4 + k² y/2, largest at y = 2 (i.e. ω², the steady
+        amplitude) when k² ≤ 2ω², and k⁴ / (4 (k² − ω²)) otherwise. Both
+        bounds are reached once the full amplitude has lasted a quarter cycle.
+        """
+        if t_end <= 0:
+            return 0.0, 0.0
+        a, om = abs(self.amplitude), self.omega
+        k2 = (math.pi / self.ramp_time) ** 2 if self.ramp_time > 0 else 0.0
+        return a, a * (om if k2 <= 2.0 * om * om else 0.5 * k2 / math.sqrt(k2 - om * om))
 
     def to_dict(self) -> dict[str, Any]:
         d: dict[str, Any] = {"type": self.kind, "frequency": self.frequency,
@@ -455,6 +503,23 @@ class Record(Excitation):
     def peak_acceleration(self, t_end: float = math.inf) -> float:
         tt, a, _, _ = self._tab
         return float(np.max(np.abs(a[tt <= t_end]))) if np.any(tt <= t_end) else 0.0
+
+    def motion_bounds(self, t_end: float = math.inf) -> tuple[float, float]:
+        """Bounds from the tabulated samples, valid between them too.
+
+        Over a sample interval Δt the velocity moves from v_k by at most
+        max |a| Δt, and the displacement from u_k by at most that velocity
+        bound times Δt (the cubic between samples never leaves these bounds).
+        """
+        tt, a, v, u = self._tab
+        # the intervals that start before t_end
+        n = min(int(np.searchsorted(tt, t_end, side="left")), tt.size - 1)
+        if n == 0:
+            return 0.0, 0.0
+        dt = np.diff(tt[:n + 1])
+        vb = np.abs(v[:n]) + np.maximum(np.abs(a[:n]), np.abs(a[1:n + 1])) * dt
+        ub = np.abs(u[:n]) + vb * dt
+        return float(ub.max()), float(vb.max())
 
     def to_dict(self) -> dict[str, Any]:
         if self.source:
