@@ -13,9 +13,9 @@ smallest centroidal radius of gyration about y: a block whose rotational energy
 
 The check uses finite differences of sampled poses, i.e. mean speeds over a
 sample interval, which never exceed the peak speed: an honest trajectory can
-not trip it. It is used by :func:`rockbench.runner.run_job` on every finished
-trajectory (:func:`check_trajectory`) and is meant for the engine watchdog
-(:class:`SpeedWatch`, one sample at a time).
+not trip it. The engine watchdog applies it to every chunk of samples while a
+run goes on, and :func:`rockbench.runner.run_job` to every finished trajectory
+(:func:`check_trajectory`), which also covers engines that bypass the watchdog.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ import numpy as np
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["SpeedBound", "SpeedWatch", "check_trajectory", "peak_base_motion", "SAFETY_FACTOR"]
+__all__ = ["SpeedBound", "check_trajectory", "SAFETY_FACTOR"]
 
 #: Safety factor on the energy bound (an exploding solver is orders of magnitude off).
 SAFETY_FACTOR = 3.0
@@ -63,11 +63,12 @@ class SpeedBound:
         factor : float
             Safety factor on the energy bound.
         v_base : float, optional
-            Peak base speed (m/s) when the caller has it; sampled otherwise.
+            Bound on the base speed (m/s) when the caller has it; from the
+            excitation's :meth:`~rockbench.scenarios.Excitation.motion_bounds` otherwise.
         """
         height = scenario.stack.total_height
         if v_base is None:
-            v_base = peak_base_motion(scenario)[1]
+            v_base = scenario.excitation.motion_bounds(scenario.duration)[1]
         v_max = factor * (math.sqrt(2.0 * scenario.g * height) + 2.0 * v_base) + SPEED_FLOOR
         k_min = min(math.sqrt(b.inertia[1] / b.m) for b in scenario.blocks)
         return cls(v_max=v_max, omega_max=v_max / k_min)
@@ -98,99 +99,6 @@ class SpeedBound:
             return (f"explosion: block {i + 1} rocking rate {spin[i]:.3g} rad/s exceeds "
                     f"the physical bound {self.omega_max:.3g} rad/s")
         return None
-
-
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    """Angles wrapped to [-π, π) (a rotation increment, not an absolute angle)."""
-    return np.remainder(angle + math.pi, 2.0 * math.pi) - math.pi
-
-
-def peak_base_motion(scenario: Scenario) -> tuple[float, float]:
-    """Peak |u_g| and |u̇_g| over the scenario (sampled, ~16 points per cycle at 5 Hz / 10 s)."""
-    exc = scenario.excitation
-    if exc.is_free:
-        return 0.0, 0.0
-    t = np.linspace(0.0, min(scenario.duration, max(exc.end_time, 0.0)), 801)
-    return float(np.max(np.abs(exc.displacement(t)))), float(np.max(np.abs(exc.velocity(t))))
-
-
-class SpeedWatch:
-    """Speed check for an engine's watchdog, one sample or one chunk of samples at a time.
-
-    It remembers the last sample it saw, so consecutive chunks are compared
-    across their boundary.
-
-    Parameters
-    ----------
-    scenario : Scenario
-        The simulated problem (gives the bound).
-    bound : SpeedBound, optional
-        The bound, when the caller has already derived it.
-    """
-
-    def __init__(self, scenario: Scenario, bound: SpeedBound | None = None) -> None:
-        self.bound = bound if bound is not None else SpeedBound.for_scenario(scenario)
-        self._prev: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-
-    def check_chunk(self, t: np.ndarray, xz: np.ndarray,
-                    theta: np.ndarray) -> tuple[int, str] | None:
-        """First sample of a chunk that moved faster than the bound, or None.
-
-        Parameters
-        ----------
-        t : ndarray, shape (m,)
-            Sample times (s), increasing.
-        xz : ndarray, shape (m, n_blocks, 2)
-            Centroid positions (x, z) in m.
-        theta : ndarray, shape (m, n_blocks)
-            Rocking angles in rad.
-
-        Returns
-        -------
-        (int, str) or None
-            Index of the first offending sample in the chunk and the reason
-            (without the time).
-        """
-        t = np.asarray(t, float).reshape(-1)
-        xz = np.asarray(xz, float).reshape(t.size, -1, 2)
-        theta = np.asarray(theta, float).reshape(t.size, -1)
-        if t.size == 0:
-            return None
-        prev, self._prev = self._prev, (t[-1:], xz[-1:], theta[-1:])
-        shift = 0
-        if prev is not None:
-            t, xz, theta = (np.concatenate([a, b]) for a, b in zip(prev, (t, xz, theta),
-                                                                    strict=True))
-            shift = 1
-        if t.size < 2:
-            return None
-        dt = np.diff(t)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            speed = np.hypot(*np.moveaxis(np.diff(xz, axis=0), -1, 0)) / dt[:, None]
-            spin = np.abs(_wrap(np.diff(theta, axis=0))) / dt[:, None]
-            fast = (np.any(speed > self.bound.v_max, axis=1)
-                    | np.any(spin > self.bound.omega_max, axis=1))
-        if not fast.any():
-            return None
-        j = int(np.argmax(fast))
-        msg = self.bound.violation(float(dt[j]), xz[j + 1] - xz[j],
-                                   _wrap(theta[j + 1] - theta[j]))
-        return j + 1 - shift, msg or "explosion: non-physical speed"
-
-    def check(self, t: float, xz: np.ndarray, theta: np.ndarray) -> str | None:
-        """Compare one sample with the previous one; a message if the bound is broken.
-
-        Parameters
-        ----------
-        t : float
-            Sample time (s).
-        xz : ndarray, shape (n_blocks, 2)
-            Centroid positions (x, z) in m.
-        theta : ndarray, shape (n_blocks,)
-            Rocking angles in rad.
-        """
-        bad = self.check_chunk(np.array([t]), np.asarray(xz)[None], np.asarray(theta)[None])
-        return None if bad is None else f"{bad[1]} at t = {t:.4g} s"
 
 
 def check_trajectory(traj: Trajectory, scenario: Scenario) -> Trajectory:

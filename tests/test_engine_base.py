@@ -34,6 +34,7 @@ class CarrySettings(EngineSettings):
     poison_at: float = math.inf  # time from which poses are NaN
     fly_at: float = math.inf  # time from which block 1 is thrown far away
     rise_at: float = math.inf  # time from which block 1 is lifted (energy gain)
+    jump_at: float = math.inf  # time from which block 1 is shifted 0.5 m along x (speed)
 
 
 class CarryEngine(Engine):
@@ -79,6 +80,8 @@ class CarryEngine(Engine):
             self.out[0, 0] = np.nan
         if self.t >= self.s.fly_at:
             self.out[0, 0] = 1e3
+        if self.t >= self.s.jump_at:  # 0.5 m within one sample, yet still in the scene
+            self.out[0, 0] += 0.5
         if self.t >= self.s.rise_at:  # a slow, steady lift: energy from nowhere
             self.out[0, 2] += 0.5 * (self.t - self.s.rise_at)
         return self.out
@@ -127,11 +130,37 @@ def test_overturning_nan_explosion_and_energy_gain_become_statuses(carry):
     assert carry.simulate(sc, {"poison_at": 0.5}).status is Status.UNSTABLE
     fast = carry.simulate(sc, {"spin": 60.0})  # beyond any free-fall rotation rate
     assert fast.status is Status.UNSTABLE and "rocking rate" in fast.message
+    assert fast.t[-1] == pytest.approx(0.01)  # the first sample, against the start pose
     fly = carry.simulate(sc, {"fly_at": 0.5})
     assert fly.status is Status.UNSTABLE and "explosion" in fly.message
     rise = carry.simulate(sc, {"rise_at": 0.5})
     assert rise.status is Status.UNSTABLE and "energy" in rise.message
     assert 0.5 < rise.t[-1] < 0.55
+
+
+@pytest.mark.parametrize("at", [0.1, 0.25, 0.26, 1.99])
+def test_watchdog_cuts_at_the_first_bad_sample_across_chunks(carry, at):
+    # output at 100 Hz: the watchdog checks chunks of 25 samples (0.25 s); a
+    # jump into the first sample of a chunk is seen against the previous chunk
+    sc = Scenario("f", B, initial_tilt=0.5, duration=2.0, output_rate=100.0)
+    assert carry.simulate(sc).status is Status.OK
+    jump = carry.simulate(sc, {"jump_at": at - 1e-6})
+    assert jump.status is Status.UNSTABLE and "centroid speed" in jump.message
+    assert jump.t[-1] == pytest.approx(at) and f"t = {at:.4g} s" in jump.message
+    nan = carry.simulate(sc, {"poison_at": at - 1e-6})
+    assert "NaN" in nan.message and nan.t[-1] == pytest.approx(at)
+
+
+def test_an_engine_that_cannot_hold_the_base_keeps_driving_it(carry):
+    class Unfixed(CarryEngine):
+        def _fix_base(self):
+            return False
+
+    eng = Unfixed()
+    sc = Scenario("p", B, excitation=SinePulse(5.0, 0.002), duration=0.5, output_rate=100.0)
+    traj = eng.simulate(sc)
+    assert traj.status is Status.OK and traj.t.size == 51
+    assert len(eng.drives) == 500 and max(eng.drives) == pytest.approx(0.499)
 
 
 def test_unsupported_is_a_status(carry):

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rockbench.bounds import SpeedBound, SpeedWatch, check_trajectory
+from rockbench.bounds import SpeedBound, check_trajectory
 from rockbench.engines import SettingsError, register, unregister
 from rockbench.errors import RockbenchError
 from rockbench.runner import Job, default_jobs, run_job, run_job_subprocess, run_jobs
@@ -136,15 +136,6 @@ def test_check_trajectory_flags_and_cuts() -> None:
     assert check_trajectory(failed, SCENARIO) is failed
 
 
-def test_speed_watch_sample_by_sample() -> None:
-    watch = SpeedWatch(SCENARIO)
-    xz = np.array([[0.0, 0.4]])
-    assert watch.check(0.0, xz, np.zeros(1)) is None
-    assert watch.check(0.01, xz + [[0.01, 0.0]], np.zeros(1)) is None
-    msg = watch.check(0.02, xz + [[1.0, 0.0]], np.zeros(1))
-    assert msg is not None and "t = 0.02" in msg
-
-
 # ---------------------------------------------------------------------- Dask
 def test_dask_local_cluster_runs_the_same_isolated_jobs() -> None:
     distributed = pytest.importorskip("distributed")
@@ -166,18 +157,3 @@ def test_dask_local_cluster_runs_the_same_isolated_jobs() -> None:
     assert "SIGSEGV" in trajs[2].message
     assert sorted(seen) == sorted(j.settings["fault"] for j in jobs)
     assert again[0].status is Status.OK
-
-
-def test_speed_watch_in_chunks() -> None:
-    watch = SpeedWatch(SCENARIO)
-    t = np.arange(10) / 100.0
-    xz = np.zeros((10, 1, 2))
-    xz[..., 1] = 0.4
-    theta = np.zeros((10, 1))
-    assert watch.check_chunk(t[:5], xz[:5], theta[:5]) is None
-    xz[5:, 0, 0] = 0.5  # jump across the chunk boundary: 0.5 m in 10 ms
-    bad = watch.check_chunk(t[5:], xz[5:], theta[5:])
-    assert bad is not None and bad[0] == 0 and "centroid speed" in bad[1]
-    theta[8:] = 1.0
-    bad = SpeedWatch(SCENARIO).check_chunk(t, np.zeros((10, 1, 2)), theta)
-    assert bad is not None and bad[0] == 8 and "rocking rate" in bad[1]
