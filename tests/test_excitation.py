@@ -63,6 +63,14 @@ def test_sinusoid_reaches_full_amplitude_after_ramp_and_ends_at_rest():
     assert s.velocity(3.0) == pytest.approx(0.0, abs=1e-15)
 
 
+def test_sinusoid_peak_acceleration_without_an_end():
+    s = Sinusoid(3.3, 0.006)  # lasts forever: periodic after its ramp
+    assert s.peak_acceleration() == pytest.approx(s.peak_acceleration(20.0), rel=1e-6)
+    # the ramp's w' and w'' terms add to the steady amplitude A ω²
+    assert s.peak_acceleration() > 0.006 * (2 * math.pi * 3.3) ** 2
+    assert s.peak_acceleration(0.0) == 0.0
+
+
 def test_impulsive_sinusoid_only_when_asked():
     s = Sinusoid(2.0, 0.01, ramp_cycles=0)
     assert s.velocity(0.0) == pytest.approx(0.01 * 4 * math.pi)

@@ -380,6 +380,11 @@ class Sinusoid(Excitation):
         s, c = np.sin(om * t), np.cos(om * t)
         return self.amplitude * (-om * om * s * w + 2 * om * c * dw + s * ddw)
 
+    def peak_acceleration(self, t_end: float = math.inf) -> float:
+        if self.duration is None:  # periodic after the ramp: one more cycle holds every peak
+            t_end = min(t_end, self.ramp_time + 1.0 / self.frequency)
+        return super().peak_acceleration(t_end)
+
     def motion_bounds(self, t_end: float = math.inf) -> tuple[float, float]:
         """|u_g| ≤ A, and |u̇_g| ≤ A ω unless the ramps are shorter than 0.35 cycles.
 
