@@ -20,6 +20,7 @@ from rockbench.engines import (
     resolve_engine_names,
     unregister,
 )
+from rockbench.engines.base import _Watchdog
 from rockbench.errors import EngineUnavailable, UnknownEngine
 from rockbench.scenarios import Block, Scenario, SinePulse, Stack
 from rockbench.trajectory import Status
@@ -138,10 +139,10 @@ def test_overturning_nan_explosion_and_energy_gain_become_statuses(carry):
     assert 0.5 < rise.t[-1] < 0.55
 
 
-@pytest.mark.parametrize("at", [0.1, 0.25, 0.26, 1.99])
+@pytest.mark.parametrize("at", [0.1, _Watchdog.PERIOD, _Watchdog.PERIOD + 0.01, 1.99])
 def test_watchdog_cuts_at_the_first_bad_sample_across_chunks(carry, at):
-    # output at 100 Hz: the watchdog checks chunks of 25 samples (0.25 s); a
-    # jump into the first sample of a chunk is seen against the previous chunk
+    # the watchdog checks chunks of PERIOD seconds of samples: a jump into the
+    # first sample of a chunk is seen against the last sample of the one before
     sc = Scenario("f", B, initial_tilt=0.5, duration=2.0, output_rate=100.0)
     assert carry.simulate(sc).status is Status.OK
     jump = carry.simulate(sc, {"jump_at": at - 1e-6})

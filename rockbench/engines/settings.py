@@ -91,9 +91,12 @@ class EngineSettings:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-able dictionary of the knobs."""
-        return {
-            k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(self).items()
-        }
+        # knobs are scalars or tuples of scalars: no need for asdict's deep copies
+        out = {}
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            out[f.name] = list(v) if isinstance(v, tuple) else v
+        return out
 
     def digest(self) -> str:
         """Short stable hash of the knob values (for result tables and caches)."""
