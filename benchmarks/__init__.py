@@ -48,31 +48,67 @@ class Timing:
 
 
 def _timed(fn: Callable[[], Any]) -> tuple[float, float, Any]:
-    gc.collect()
-    gc.disable()
-    try:
-        c0, w0 = time.process_time(), time.perf_counter()
-        out = fn()
-        w1, c1 = time.perf_counter(), time.process_time()
-    finally:
-        gc.enable()
+    c0, w0 = time.process_time(), time.perf_counter()
+    out = fn()
+    w1, c1 = time.perf_counter(), time.process_time()
     return w1 - w0, c1 - c0, out
+
+
+class _NoGc:
+    """The cyclic garbage collector off while timing, run between rounds instead.
+
+    A full collection walks every object of the process (~50 ms with the
+    engines' libraries loaded) and leaves the caches cold: collecting before
+    each call would cap a short case at a few dozen rounds and time every one
+    of them cold. Rounds are still separated by a collection every second.
+    """
+
+    def __enter__(self) -> _NoGc:
+        gc.collect()
+        gc.disable()
+        self._last = time.perf_counter()
+        return self
+
+    def between_rounds(self) -> None:
+        if time.perf_counter() - self._last > 1.0:
+            gc.collect()
+            self._last = time.perf_counter()
+
+    def __exit__(self, *exc: object) -> None:
+        gc.enable()
 
 
 def best_of(fn: Callable[[], Any], repeat: int) -> Timing:
     """Minimum wall/CPU time of ``repeat`` calls of ``fn``."""
     t = Timing()
-    for _ in range(max(1, repeat)):
-        t.add(*_timed(fn))
+    with _NoGc() as nogc:
+        for _ in range(max(1, repeat)):
+            t.add(*_timed(fn))
+            nogc.between_rounds()
     return t
 
 
-def interleaved(fns: dict[str, Callable[[], Any]], repeat: int) -> dict[str, Timing]:
-    """Time several variants side by side: A B C A B C ... (``repeat`` rounds), minima kept."""
+def interleaved(fns: dict[str, Callable[[], Any]], repeat: int,
+                min_time: float = 0.0) -> dict[str, Timing]:
+    """Time several variants side by side: A B C A B C ..., minima kept.
+
+    At least ``repeat`` rounds, and more until the rounds have taken about
+    ``min_time`` seconds: the minimum of a few-millisecond run needs hundreds
+    of samples on a shared machine, that of a one-second run a handful.
+    """
     out = {k: Timing() for k in fns}
-    for _ in range(max(1, repeat)):
-        for k, fn in fns.items():
-            out[k].add(*_timed(fn))
+    rounds = max(1, repeat)
+    done = 0
+    with _NoGc() as nogc:
+        start = time.perf_counter()
+        while done < rounds:
+            for k, fn in fns.items():
+                out[k].add(*_timed(fn))
+            done += 1
+            if done == 1 and min_time > 0:
+                per_round = time.perf_counter() - start
+                rounds = max(rounds, math.ceil(min_time / max(per_round, 1e-6)))
+            nogc.between_rounds()
     return out
 
 

@@ -3,7 +3,8 @@
 For every engine with a raw loop (:mod:`benchmarks.raw_loops`), on B0 free
 rocking and on a forced single block (Single #2 under the 5 Hz / 6 mm
 sinusoid, driven for the whole run), at the ``accurate`` preset, this times
-side by side, interleaved, best of N:
+side by side, interleaved, best of N (N ≥ 7 and enough rounds to fill
+``MIN_TIME`` seconds, so that a few-millisecond case gets hundreds):
 
 * ``simulate()``: the plugin through the shared template loop;
 * the raw loop (same ``_build``, same dt, same base values, same output sampling).
@@ -32,6 +33,8 @@ __all__ = ["run", "cases"]
 
 #: Overhead goal (fraction).
 GOAL = 0.10
+#: Seconds of interleaved rounds per case at least (short runs get many repeats).
+MIN_TIME = 3.0
 
 
 # ---------------------------------------------------------------------- cases
@@ -52,10 +55,10 @@ def run(quick: bool = False, repeat: int | None = None) -> tuple[str, dict]:
     for name in ENGINES:
         ok, what = engine_status(name)
         if not ok:
-            rows.append(f"| {name} | – | – | – | – | – | {what} |")
+            rows.append(f"| {name} | – | – | – | – | – | – | {what} |")
             continue
         if name not in RAW_LOOPS:
-            rows.append(f"| {name} | – | – | – | – | – | no raw loop yet |")
+            rows.append(f"| {name} | – | – | – | – | – | – | no raw loop yet |")
             continue
         settings = engine_class(name).settings("accurate")
         warm(name)
@@ -70,9 +73,9 @@ def run(quick: bool = False, repeat: int | None = None) -> tuple[str, dict]:
                 fns["variant"] = lambda sc=sc, name=name, vloop=vloop, st=settings: run_raw(
                     name, sc, st, loop=vloop)
             try:
-                res = interleaved(fns, repeat)
+                res = interleaved(fns, repeat, min_time=MIN_TIME if not quick else 1.0)
             except Exception as exc:  # an engine in progress may fail: report it
-                rows.append(f"| {name} | {label} | – | – | – | – | failed: "
+                rows.append(f"| {name} | {label} | – | – | – | – | – | failed: "
                             f"{type(exc).__name__}: {str(exc)[:80]} |")
                 continue
             traj = res["adapter"].result
@@ -86,7 +89,7 @@ def run(quick: bool = False, repeat: int | None = None) -> tuple[str, dict]:
             ovh = a.cpu / r.cpu - 1.0
             ovh_w = a.wall / r.wall - 1.0
             steps = round(sc.duration / traj.settings["effective_timestep"])
-            entry = dict(engine=name, case=label, steps=steps, adapter_cpu=a.cpu,
+            entry = dict(engine=name, case=label, steps=steps, runs=a.n, adapter_cpu=a.cpu,
                          raw_cpu=r.cpu, adapter_wall=a.wall, raw_wall=r.wall,
                          overhead=ovh, overhead_wall=ovh_w, diff=diff)
             if "variant" in res:
@@ -97,20 +100,21 @@ def run(quick: bool = False, repeat: int | None = None) -> tuple[str, dict]:
             data.append(entry)
             verdict = "✓" if ovh <= GOAL else "✗"
             rows.append(
-                f"| {name} | {label} | {steps} | {1e6 * a.cpu / steps:.2f} | "
+                f"| {name} | {label} | {steps} | {a.n} | {1e6 * a.cpu / steps:.2f} | "
                 f"{1e6 * r.cpu / steps:.2f} | **{100 * ovh:+.0f} %** {verdict} "
                 f"(wall {100 * ovh_w:+.0f} %) | Δθ {diff:.0e} λ"
                 f"{'; ' + '; '.join(notes) if notes else ''} |")
     head = [
         "## 1. Adapter overhead (`simulate()` vs a minimal raw loop)",
         "",
-        f"Accurate preset of each engine, 1 kHz output, best of {repeat} interleaved runs, "
+        f"Accurate preset of each engine, 1 kHz output, best of the interleaved runs (at "
+        f"least {repeat}, and enough for {MIN_TIME:g} s per case: the runs column), "
         f"{load()} at the end of this section. Times are CPU µs per physics step "
         "(build included, the same for both); overhead = simulate / raw − 1 on CPU time "
         f"(goal ≤ {100 * GOAL:.0f} %). Δθ: max |θ_simulate − θ_raw| / λ (0: bit-identical).",
         "",
-        "| engine | case | steps | simulate µs/step | raw µs/step | overhead | notes |",
-        "|---|---|---|---|---|---|---|",
+        "| engine | case | steps | runs | simulate µs/step | raw µs/step | overhead | notes |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     return "\n".join(head + rows) + "\n", {"rows": data, "load": load()}
 
