@@ -1,15 +1,15 @@
 """``--engine analytic``: the analytic references behind the engine interface.
 
 A thin adapter so that the CLI, the report and the matrix treat the reference
-like any engine. It overrides :meth:`simulate` because there is no time
-stepping to share; everything else follows the engine contract.
+like any engine. It replaces the time-stepping loop (``Engine._run``) by the
+reference solution; :meth:`~rockbench.engines.Engine.simulate` still resolves
+the settings, refuses unsupported scenarios and times the run.
 """
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
@@ -19,7 +19,7 @@ from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.settings import EngineSettings
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import Scenario
-from rockbench.trajectory import Status, Trajectory
+from rockbench.trajectory import Trajectory
 
 __all__ = ["AnalyticEngine", "AnalyticSettings"]
 
@@ -56,27 +56,13 @@ class AnalyticEngine(Engine):
                 "analytic references exist for one block or two centred stacked blocks only"
             )
 
-    def simulate(self, scenario: Scenario, settings: Any = None) -> Trajectory:  # noqa: D102
-        s = self.resolve_settings(settings)
-        meta = dict(engine=self.name, engine_version=self.version(), settings=s.to_dict(),
-                    scenario=scenario.name)
-        try:
-            self.check_supported(scenario)
-        except UnsupportedScenario as exc:
-            return Trajectory.failed(Status.UNSUPPORTED, str(exc), n_blocks=scenario.n_blocks,
-                                     **meta)
-        start = time.perf_counter()
-        try:
-            traj = analytic.reference(scenario, linear=s.linear)
-        except UnsupportedScenario as exc:
-            return Trajectory.failed(Status.UNSUPPORTED, str(exc), n_blocks=scenario.n_blocks,
-                                     **meta)
-        traj.engine, traj.engine_version = self.name, self.version()
+    def _run(self, scenario: Scenario, settings: EngineSettings, meta: dict) -> Trajectory:
+        traj = analytic.reference(scenario, linear=settings.linear)  # type: ignore[attr-defined]
+        traj.engine, traj.engine_version = meta["engine"], meta["engine_version"]
         traj.settings = {**traj.settings, **meta["settings"]}
-        traj.wall_time = time.perf_counter() - start
         return traj
 
-    # the hooks are never reached: simulate() is overridden above
+    # the stepping hooks are never reached: _run() is replaced above
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
         raise NotImplementedError
 
