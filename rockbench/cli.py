@@ -19,7 +19,8 @@ import numpy as np
 import rockbench
 from rockbench.errors import RockbenchError
 
-__all__ = ["main", "build_parser", "add_engine_arguments", "engine_settings", "Progress"]
+__all__ = ["main", "build_parser", "add_engine_arguments", "add_settings_arguments",
+           "engine_settings", "Progress"]
 
 #: Sub-commands: name → (module, one-line help). Modules are imported on use.
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -44,52 +45,40 @@ class _Parser(argparse.ArgumentParser):
 
 
 def add_engine_arguments(p: argparse.ArgumentParser, default: str = "all") -> None:
-    """The engine selection flags shared by every command that runs engines."""
+    """The engine selection and settings flags shared by every command that runs engines."""
     p.add_argument("--engine", "-e", default=default, metavar="NAMES",
                    help=f"'all' or a comma list of engines (default: {default})")
+    add_settings_arguments(p)
+
+
+def add_settings_arguments(p: argparse.ArgumentParser) -> None:
+    """``--preset``, ``--settings FILE`` and ``--set``: the layers of :func:`engine_settings`."""
     p.add_argument("--preset", default=None, metavar="NAME",
                    help="settings preset for every engine (e.g. accurate, fast)")
+    p.add_argument("--settings", dest="settings_file", default=None, metavar="FILE",
+                   help="TOML file of engine knobs ([engine] knob = value), e.g. written by "
+                        "`rockbench tune`; it overrides --preset, and --set overrides it")
     p.add_argument("--set", dest="set_options", action="append", default=[],
                    metavar="ENGINE.KNOB=VALUE",
                    help="override an engine knob, e.g. --set bullet.substeps=20 (repeatable)")
 
 
 def engine_settings(args: argparse.Namespace, engines: Sequence[str]) -> dict[str, dict[str, Any]]:
-    """Per-engine settings mappings from ``--preset``/``--set``, validated now.
+    """Per-engine settings from ``--preset``, ``--settings FILE`` and ``--set``, validated now.
+
+    See :func:`rockbench.presets.layered_settings` (values typed, later layers win).
 
     Raises
     ------
     SettingsError
-        Unknown knob or preset, or a value of the wrong type.
+        Bad settings file, unknown knob or preset, or a value of the wrong type.
     UnknownEngine
         ``--set`` names an engine that is not selected or does not exist.
     """
-    from rockbench.engines import engine_class, parse_set_options
-    from rockbench.engines.registry import ALIASES
+    from rockbench.presets import layered_settings
 
-    parsed = parse_set_options(args.set_options)
-    out: dict[str, dict[str, Any]] = {}
-    for name in parsed:
-        canon = ALIASES.get(name, name)
-        if canon not in engines:
-            from rockbench.errors import UnknownEngine
-
-            raise UnknownEngine(name, engines)
-    for name in engines:
-        cls = engine_class(name)
-        overrides = dict(parsed.get(name, {}) or parsed.get(_alias_of(name), {}))
-        preset = overrides.pop("preset", None) or args.preset
-        if cls.capabilities.analytic:
-            preset = None
-        cls.settings(preset, **overrides)  # validate now, before anything runs
-        out[name] = ({"preset": preset} if preset else {}) | overrides
-    return out
-
-
-def _alias_of(name: str) -> str:
-    from rockbench.engines.registry import ALIASES
-
-    return next((a for a, c in ALIASES.items() if c == name), name)
+    return layered_settings(engines, preset=args.preset, settings_file=args.settings_file,
+                            set_options=args.set_options)
 
 
 class Progress:
@@ -196,11 +185,8 @@ def _execute_scenarios(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------------- run
 def _configure_run(p: argparse.ArgumentParser) -> None:
-    from rockbench.presets import add_settings_file_argument
-
     p.add_argument("scenario", help="catalog name or scenario .toml file")
     add_engine_arguments(p, default="analytic")
-    add_settings_file_argument(p)
     p.add_argument("--out", "-o", default=None, metavar="FILE",
                    help="write trajectories (.csv or .npz, + .json sidecar); with several "
                         "engines the engine name is appended to the file stem")
@@ -223,13 +209,12 @@ def _execute_run(args: argparse.Namespace) -> int:
 
     from rockbench import analytic, metrics
     from rockbench.engines import resolve_engine_names
-    from rockbench.presets import settings_with_file
     from rockbench.runner import Job, run_jobs
     from rockbench.scenarios import get_scenario, scenario_to_dict
 
     scenario = get_scenario(args.scenario)
     engines = resolve_engine_names(args.engine)
-    settings = settings_with_file(args, engines)
+    settings = engine_settings(args, engines)
     if args.out:
         for e in engines:
             _out_path(args.out, e, len(engines) > 1)

@@ -1,4 +1,4 @@
-"""Settings files: engine knobs saved as TOML, read back with ``--settings FILE``.
+"""Engine settings from the command line: presets, settings files and ``--set``.
 
 A settings file holds one table per engine, with knob values as in ``--set``
 and optionally a ``preset`` to start from::
@@ -13,12 +13,12 @@ and optionally a ``preset`` to start from::
     iterations = 40
 
 Commands that run engines combine, later winning: the ``--preset`` option, the
-settings file, then ``--set`` options. ``rockbench tune`` writes such files.
+settings file (``--settings FILE``), then ``--set`` options
+(:func:`layered_settings`). ``rockbench tune`` writes such files.
 """
 
 from __future__ import annotations
 
-import argparse
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -28,8 +28,7 @@ import tomli_w
 from rockbench.engines import SettingsError
 from rockbench.tomlfile import read_toml
 
-__all__ = ["load_settings_file", "write_settings_file", "add_settings_file_argument",
-           "settings_with_file", "typed_settings"]
+__all__ = ["load_settings_file", "write_settings_file", "layered_settings", "typed_settings"]
 
 
 def load_settings_file(path: str | Path) -> dict[str, dict[str, Any]]:
@@ -65,48 +64,65 @@ def write_settings_file(path: str | Path, settings: Mapping[str, Mapping[str, An
     return path
 
 
-def add_settings_file_argument(p: argparse.ArgumentParser) -> None:
-    """The ``--settings FILE`` option (a settings file, e.g. written by ``tune``)."""
-    p.add_argument("--settings", dest="settings_file", default=None, metavar="FILE",
-                   help="TOML file of engine knobs ([engine] knob = value), e.g. written by "
-                        "`rockbench tune`; --set options override it")
+def layered_settings(engines: Sequence[str], *, preset: str | None = None,
+                     settings_file: str | Path | None = None,
+                     set_options: Sequence[str] = ()) -> dict[str, dict[str, Any]]:
+    """Per-engine knob overrides from a preset, a settings file and ``--set`` options.
 
+    Later layers win: ``preset`` (every engine but the analytic reference),
+    then the file's table for the engine, then the ``engine.knob=value``
+    options. Engines in the file that are not selected are ignored.
 
-def settings_with_file(args: argparse.Namespace,
-                       engines: Sequence[str]) -> dict[str, dict[str, Any]]:
-    """Per-engine settings from ``--preset``, ``--settings FILE`` and ``--set``, validated.
+    Parameters
+    ----------
+    engines : sequence of str
+        Selected engines (canonical names).
+    preset : str, optional
+        Preset for every engine (``--preset``).
+    settings_file : str or Path, optional
+        A settings file (``--settings FILE``).
+    set_options : sequence of str
+        ``engine.knob=value`` strings (``--set``; aliases accepted).
 
-    Engines in the file that are not selected are ignored.
+    Returns
+    -------
+    dict
+        ``{engine: {"preset": name, knob: value, ...}}`` with every value
+        converted to its knob's type (``"preset"`` only when one applies), so
+        that equal settings compare and hash equal.
 
     Raises
     ------
     SettingsError
-        Bad file, unknown knob or preset, or a value of the wrong type.
+        Bad file (its path leads the message), unknown knob or preset, or a
+        value of the wrong type.
+    UnknownEngine
+        ``--set`` names an engine that is not selected or does not exist.
     """
-    from rockbench.cli import engine_settings
+    from rockbench.engines import engine_class, parse_set_options
     from rockbench.engines.registry import ALIASES
+    from rockbench.errors import UnknownEngine
 
-    path = getattr(args, "settings_file", None)
-    if not path:
-        return engine_settings(args, engines)
-    from_file = {ALIASES.get(k, k): v for k, v in load_settings_file(path).items()}
-    # file entries become --set options placed before the user's own, which win
-    opts = [f"{e}.{k}={_as_option(v)}" for e, table in from_file.items() if e in engines
-            for k, v in table.items()]
-    merged = argparse.Namespace(**vars(args))
-    merged.set_options = opts + list(getattr(args, "set_options", []) or [])
-    try:
-        return engine_settings(merged, engines)
-    except SettingsError as exc:
-        raise SettingsError(f"{path}: {exc}") from None
-
-
-def _as_option(value: Any) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (list, tuple)):
-        return ",".join(map(str, value))
-    return str(value)
+    options: dict[str, dict[str, Any]] = {}
+    for name, knobs in parse_set_options(list(set_options)).items():
+        canon = ALIASES.get(name, name)
+        if canon not in engines:
+            raise UnknownEngine(name, list(engines))
+        options.setdefault(canon, {}).update(knobs)
+    from_file: dict[str, dict[str, Any]] = {}
+    if settings_file:
+        from_file = {ALIASES.get(k, k): v for k, v in load_settings_file(settings_file).items()}
+    out: dict[str, dict[str, Any]] = {}
+    for name in engines:
+        default = None if engine_class(name).capabilities.analytic else preset
+        if name in from_file:
+            try:  # the file alone first, so that its errors name it
+                typed_settings(name, {"preset": default, **from_file[name]})
+            except SettingsError as exc:
+                raise SettingsError(f"{settings_file}: {exc}") from None
+        layer = {"preset": default, **from_file.get(name, {}), **options.get(name, {})}
+        out[name] = typed_settings(name, layer)
+    return out
 
 
 def typed_settings(engine: str, settings: Mapping[str, Any]) -> dict[str, Any]:
@@ -123,7 +139,7 @@ def typed_settings(engine: str, settings: Mapping[str, Any]) -> dict[str, Any]:
     from rockbench.engines import engine_class
 
     s = dict(settings)
-    preset = s.pop("preset", None)
+    preset = s.pop("preset", None) or None
     resolved = engine_class(engine).settings(preset, **s)
     out: dict[str, Any] = {"preset": preset} if preset else {}
     out.update({k: getattr(resolved, k) for k in s})

@@ -35,6 +35,7 @@ def test_help_and_listing(capsys):
     (["run", "missing.toml"], "cannot read"),
     (["scenarios", "--suite", "nope"], "unknown suite 'nope'"),
     (["run"], "required"),
+    (["run", "free-b0", "--settings", "missing.toml"], "missing.toml"),
 ])
 def test_bad_input_is_one_line_and_status_2(args, needle):
     r = _cli(*args)

@@ -261,6 +261,18 @@ def test_resume_skips_finished_runs(report: dict, capsys: pytest.CaptureFixture)
     after = {p: p.stat().st_mtime_ns for p in npz}
     changed = {p.parent.name + "/" + p.stem for p in npz if after[p] != before[p]}
     assert changed == {f"{s}/{_file(eng)}" for s in SCENARIOS}
+    # the same knob from a settings file (as `tune` writes it) is the same run
+    tuned = report["tmp"] / "tuned.toml"
+    tuned.write_text(f"[{eng}]\niterations = 7\n")
+    capsys.readouterr()
+    assert main([a for a in report["argv"] if a != "--quiet"]
+                + ["--resume", "--settings", str(tuned)]) == 0
+    assert "0 run, 6 reused" in capsys.readouterr().out
+    assert f"--settings {tuned}" in (out / "report.md").read_text()
+    # presets are chosen with --presets, not by a file
+    tuned.write_text(f'[{eng}]\npreset = "accurate"\n')
+    assert main(report["argv"] + ["--resume", "--settings", str(tuned)]) == 2
+    assert "--presets" in capsys.readouterr().err
 
 
 def test_bad_suite_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:

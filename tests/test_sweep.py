@@ -13,7 +13,7 @@ import pytest
 
 from rockbench.cli import main
 from rockbench.engines import SettingsError, register, unregister
-from rockbench.presets import load_settings_file, settings_with_file, write_settings_file
+from rockbench.presets import layered_settings, load_settings_file, write_settings_file
 from rockbench.report.sweep import (
     SweepError,
     cheapest,
@@ -120,25 +120,25 @@ def test_sweep_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
 
 
 def test_settings_files(tmp_path: Path) -> None:
-    import argparse
-
     path = write_settings_file(tmp_path / "p.toml", {"fault": {"timestep": 0.002,
                                                                "follow": True}},
                                comment=["made by a test"])
     assert path.read_text().startswith("# made by a test\n")
     assert load_settings_file(path) == {"fault": {"timestep": 0.002, "follow": True}}
-    args = argparse.Namespace(settings_file=str(path), set_options=["fault.timestep=0.004"],
-                              preset=None)
-    merged = settings_with_file(args, ["fault"])["fault"]
-    assert merged["follow"] == "true" and merged["timestep"] == "0.004"  # --set wins
+    merged = layered_settings(["fault"], settings_file=path,
+                              set_options=["fault.timestep=0.004"])["fault"]
+    assert merged == {"follow": True, "timestep": 0.004}  # typed; --set wins over the file
+    # the file wins over --preset; engines it names but not selected are ignored
+    assert layered_settings(["fault"], preset="fast", settings_file=path)["fault"] == {
+        "preset": "fast", "timestep": 0.002, "follow": True}
+    assert layered_settings([], settings_file=path) == {}
     bad = tmp_path / "bad.toml"
     bad.write_text("timestep = 1\n")
     with pytest.raises(SettingsError, match="must be a table"):
         load_settings_file(bad)
     bad.write_text("[fault]\nnosuch = 1\n")
     with pytest.raises(SettingsError, match="bad.toml"):
-        settings_with_file(argparse.Namespace(settings_file=str(bad), set_options=[],
-                                              preset=None), ["fault"])
+        layered_settings(["fault"], settings_file=bad)
 
 
 def test_tune_finds_the_cheapest_settings_and_writes_a_preset(

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from rockbench.cli import Progress, add_engine_arguments, engine_settings
 from rockbench.errors import RockbenchError, UnknownScenario
+from rockbench.report.matrix_command import check_parallel_arguments
 
 __all__ = ["configure", "execute", "DEFAULT_PRESETS"]
 
@@ -69,6 +70,8 @@ def _command_line(args: argparse.Namespace) -> str:
         parts += ["--preset", args.preset]
     if args.presets:
         parts += ["--presets", args.presets]
+    if args.settings_file:
+        parts += ["--settings", str(args.settings_file)]
     for s in args.set_options:
         parts += ["--set", s]
     parts += ["--out", args.out]
@@ -102,10 +105,7 @@ def execute(args: argparse.Namespace) -> int:
         scenarios = resolve_scenarios(args.scenarios)
         if not scenarios:
             raise RockbenchError("--scenarios names no scenario")
-    if args.jobs < 1:
-        raise RockbenchError(f"--jobs must be >= 1, got {args.jobs}")
-    if args.timeout is not None and args.timeout <= 0:
-        raise RockbenchError(f"--timeout must be > 0, got {args.timeout:g}")
+    check_parallel_arguments(args)
     if args.preset and args.presets:
         raise RockbenchError("give either --preset or --presets, not both")
     if args.preset:
@@ -125,7 +125,8 @@ def execute(args: argparse.Namespace) -> int:
             continue
         ov = dict(settings.get(e, {}))
         if "preset" in ov:
-            raise RockbenchError(f"select presets with --presets, not --set {e}.preset")
+            raise RockbenchError(f"select presets with --presets, not {e}.preset in --set or "
+                                 "--settings")
         cls = engine_class(e)
         for p in presets:
             cls.settings(p, **ov)  # unknown preset or bad knob: one line, exit 2

@@ -6,20 +6,19 @@ import argparse
 import sys
 from typing import Any
 
-from rockbench.cli import Progress, add_engine_arguments
+from rockbench.cli import Progress, add_engine_arguments, engine_settings
 from rockbench.errors import RockbenchError
 
 __all__ = ["configure_matrix", "execute_matrix", "configure_history", "execute_history",
-           "add_run_arguments", "open_store", "selected_settings"]
+           "add_run_arguments", "add_parallel_arguments", "check_parallel_arguments",
+           "open_store"]
 
 
 # ---------------------------------------------------------------------- shared options
 def add_run_arguments(p: argparse.ArgumentParser, *, timeout: float | None = 600.0) -> None:
     """Options shared by matrix, sweep and tune: store, parallelism, time limit, executor."""
-    from rockbench.presets import add_settings_file_argument
     from rockbench.store import DEFAULT_DB
 
-    add_settings_file_argument(p)
     p.add_argument("--db", default=DEFAULT_DB, metavar="FILE",
                    help=f"results store (SQLite), appended as each run finishes "
                         f"(default: ./{DEFAULT_DB})")
@@ -51,20 +50,13 @@ def open_store(args: argparse.Namespace) -> Any:
     return None if getattr(args, "no_db", False) else Store(args.db)
 
 
-def selected_settings(args: argparse.Namespace, engines: list[str]) -> dict[str, dict[str, Any]]:
-    """Typed per-engine settings from ``--preset``, ``--settings`` and ``--set``."""
-    from rockbench.presets import settings_with_file, typed_settings
-
-    raw = settings_with_file(args, engines)
-    return {e: typed_settings(e, raw.get(e, {})) for e in engines}
-
-
-def _check_jobs(args: argparse.Namespace) -> None:
+def check_parallel_arguments(args: argparse.Namespace) -> None:
+    """Reject bad ``--jobs``, ``--timeout`` and ``--scheduler`` values (one line, exit 2)."""
     if args.jobs < 1:
         raise RockbenchError(f"--jobs must be >= 1, got {args.jobs}")
     if args.timeout is not None and not args.timeout > 0:
         raise RockbenchError(f"--timeout must be > 0, got {args.timeout:g}")
-    if args.scheduler and args.executor != "dask":
+    if getattr(args, "scheduler", None) and args.executor != "dask":
         raise RockbenchError("--scheduler needs --executor dask")
 
 
@@ -113,12 +105,12 @@ def execute_matrix(args: argparse.Namespace) -> int:
         write_junit,
     )
     from rockbench.report.tolerances import load_tolerances
-    _check_jobs(args)
+    check_parallel_arguments(args)
     scenarios = _scenarios(args.suite)
     if not scenarios:
         raise RockbenchError(f"--suite {args.suite!r} selects no scenario")
     engines = resolve_engine_names(args.engine, include_analytic=False)
-    settings = selected_settings(args, engines)
+    settings = engine_settings(args, engines)
     tolerances = load_tolerances(args.tolerances)
     baseline = load_baseline(args.baseline) if args.baseline else None
     if tolerances.suite and tolerances.suite != args.suite:

@@ -20,7 +20,7 @@ import numpy as np
 
 from rockbench.cli import Progress, add_engine_arguments, engine_settings
 from rockbench.errors import RockbenchError
-from rockbench.report.matrix_command import add_parallel_arguments
+from rockbench.report.matrix_command import add_parallel_arguments, check_parallel_arguments
 
 __all__ = ["configure", "execute"]
 
@@ -75,10 +75,7 @@ def execute(args: argparse.Namespace) -> int:
     from rockbench.engines import resolve_engine_names
     from rockbench.report import spectrum as sp
 
-    if args.jobs < 1:
-        raise RockbenchError(f"--jobs must be >= 1, got {args.jobs}")
-    if args.scheduler and args.executor != "dask":
-        raise RockbenchError("--scheduler needs --executor dask")
+    check_parallel_arguments(args)
     if not (args.tol > 0 and math.isfinite(args.tol)):
         raise RockbenchError(f"--tol must be > 0, got {args.tol}")
     if args.eta is not None and not 0.0 <= args.eta <= 1.0:

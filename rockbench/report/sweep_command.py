@@ -8,14 +8,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from rockbench.cli import Progress, add_engine_arguments
+from rockbench.cli import Progress, add_engine_arguments, add_settings_arguments, engine_settings
 from rockbench.errors import RockbenchError
-from rockbench.report.matrix_command import (
-    _check_jobs,
-    add_run_arguments,
-    open_store,
-    selected_settings,
-)
+from rockbench.report.matrix_command import add_run_arguments, check_parallel_arguments, open_store
 
 __all__ = ["configure_sweep", "execute_sweep", "configure_tune", "execute_tune"]
 
@@ -79,12 +74,12 @@ def execute_sweep(args: argparse.Namespace) -> int:
     )
     from rockbench.scenarios import get_scenario
 
-    _check_jobs(args)
+    check_parallel_arguments(args)
     if args.target is not None and not args.target > 0:
         raise RockbenchError(f"--target must be > 0, got {args.target:g}")
     scenario = get_scenario(args.scenario)
     engines = resolve_engine_names(args.engine, include_analytic=False)
-    base = selected_settings(args, engines)
+    base = engine_settings(args, engines)
     grid = parse_grid(args.grid, engines)
     n = sum(math.prod(len(v) for v in g.values()) for g in grid.values())
     out = Path(args.out or f"sweep-{scenario.name}")
@@ -128,10 +123,7 @@ def configure_tune(p: argparse.ArgumentParser) -> None:
     """Options of ``rockbench tune``."""
     p.add_argument("scenario", help="catalog name or scenario .toml file")
     p.add_argument("--engine", "-e", required=True, metavar="NAME", help="engine to tune")
-    p.add_argument("--preset", default=None, metavar="NAME",
-                   help="start from this preset's knobs")
-    p.add_argument("--set", dest="set_options", action="append", default=[],
-                   metavar="ENGINE.KNOB=VALUE", help="fix a knob (repeatable)")
+    add_settings_arguments(p)  # the starting point; --knob names what is searched
     p.add_argument("--target", type=float, required=True, metavar="ERR",
                    help="largest acceptable error (see --metric)")
     _metric_arguments(p)
@@ -154,7 +146,7 @@ def execute_tune(args: argparse.Namespace) -> int:
     from rockbench.report.sweep import tune
     from rockbench.scenarios import get_scenario
 
-    _check_jobs(args)
+    check_parallel_arguments(args)
     if not args.target > 0:
         raise RockbenchError(f"--target must be > 0, got {args.target:g}")
     if args.budget < 1:
@@ -164,7 +156,7 @@ def execute_tune(args: argparse.Namespace) -> int:
     if len(engines) != 1:
         raise RockbenchError("tune takes exactly one engine")
     engine = engines[0]
-    base = selected_settings(args, engines)[engine]
+    base = engine_settings(args, engines)[engine]
     store = open_store(args)
     try:
         with Progress(args.budget, f"tune {engine}") as bar:
@@ -196,7 +188,7 @@ def execute_tune(args: argparse.Namespace) -> int:
         f"--metric {args.metric}",
         f"{args.metric} = {res.best.error(args.metric):.4g}, wall time "
         f"{res.best.cost:.3f} s ({len(res.evaluated)} runs searched)",
-        "use with: rockbench matrix|sweep|tune ... --settings " + out.name,
+        "use with: rockbench run|compare|matrix|sweep|tune|spectrum ... --settings " + out.name,
     ])
     print(f"cheapest: {_knob_text(res.best.knobs)} ({args.metric} "
           f"{res.best.error(args.metric):.3g}, {res.best.cost:.3f} s)")
