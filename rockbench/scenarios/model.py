@@ -215,13 +215,21 @@ class Stack:
     @property
     def base_z(self) -> np.ndarray:
         """Height of each block's bottom face above the ground when upright (m)."""
-        return np.concatenate([[0.0], np.cumsum([b.height for b in self.blocks])[:-1]])
+        return np.array(self._base_z())
+
+    def _base_z(self) -> list[float]:
+        # a running sum in Python floats: a few blocks cost less than NumPy's call overhead
+        out, z = [], 0.0
+        for b in self.blocks:
+            out.append(z)
+            z += b.height
+        return out
 
     @property
     def centroids(self) -> np.ndarray:
         """Upright centroid (x, z) of each block, shape (n, 2)."""
-        z = self.base_z + np.array([b.h for b in self.blocks])
-        return np.column_stack([np.array(self.offsets), z])
+        return np.array([(x, z + b.h) for x, z, b in zip(self.offsets, self._base_z(),
+                                                          self.blocks, strict=True)])
 
     def monolithic(self, g: float = 9.81) -> RockingProperties:
         """Rocking constants of the whole stack rocking as one body on the bottom pivots."""
