@@ -17,12 +17,14 @@ import gc
 import math
 import os
 import platform
+import statistics
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["ENGINES", "ENGINES_3D", "Timing", "best_of", "interleaved", "engine_status",
+__all__ = ["ENGINES", "ENGINES_3D", "Timing", "best_of", "interleaved", "paired_ratio",
+           "engine_status",
            "load", "machine_info", "fmt_time", "warm"]
 
 #: Every engine the project has or is adding, in table order.
@@ -33,18 +35,33 @@ ENGINES_3D = ("mujoco", "bullet", "dart", "drake")
 
 @dataclass
 class Timing:
-    """Best (minimum) wall and CPU time over repeats, in s, and the last result."""
+    """Best (minimum) wall and CPU time over repeats, in s, every CPU time, the last result."""
 
     wall: float = math.inf
     cpu: float = math.inf
     result: Any = None
-    n: int = 0
+    cpus: list[float] = field(default_factory=list)
+
+    @property
+    def n(self) -> int:
+        """Number of timed runs."""
+        return len(self.cpus)
 
     def add(self, wall: float, cpu: float, result: Any) -> None:
         self.wall = min(self.wall, wall)
         self.cpu = min(self.cpu, cpu)
         self.result = result
-        self.n += 1
+        self.cpus.append(cpu)
+
+
+def paired_ratio(a: Timing, b: Timing) -> float:
+    """Median over rounds of a's CPU time over b's, from :func:`interleaved` timings.
+
+    The two runs of a round are a fraction of a second apart, so a machine
+    whose speed drifts over seconds (a shared host) slows both alike: the
+    ratio of each pair is steadier than the ratio of the two minima.
+    """
+    return float(statistics.median(x / y for x, y in zip(a.cpus, b.cpus, strict=True)))
 
 
 def _timed(fn: Callable[[], Any]) -> tuple[float, float, Any]:
@@ -90,7 +107,10 @@ def best_of(fn: Callable[[], Any], repeat: int) -> Timing:
 
 def interleaved(fns: dict[str, Callable[[], Any]], repeat: int,
                 min_time: float = 0.0) -> dict[str, Timing]:
-    """Time several variants side by side: A B C A B C ..., minima kept.
+    """Time several variants side by side: A B C, C B A, A B C ..., minima kept.
+
+    The order alternates from round to round so that neither variant always
+    runs right after the other (whose cache or allocator state it would inherit).
 
     At least ``repeat`` rounds, and more until the rounds have taken about
     ``min_time`` seconds: the minimum of a few-millisecond run needs hundreds
@@ -101,8 +121,9 @@ def interleaved(fns: dict[str, Callable[[], Any]], repeat: int,
     done = 0
     with _NoGc() as nogc:
         start = time.perf_counter()
+        order = list(fns.items())
         while done < rounds:
-            for k, fn in fns.items():
+            for k, fn in order if done % 2 == 0 else order[::-1]:
                 out[k].add(*_timed(fn))
             done += 1
             if done == 1 and min_time > 0:

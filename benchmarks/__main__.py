@@ -51,7 +51,11 @@ def _summary(data: dict) -> list[str]:
             f"{r['engine']} {r['exponent']:.2f}" for r in sc["duration"]) + " |")
     if sc.get("stacks"):
         rows.append("| cost ≈ linear in stacked blocks (N ≥ 2) | exponents " + ", ".join(
-            f"{r['engine']} {r['exponent']:.2f}" for r in sc["stacks"]) + " |")
+            f"{r['engine']}{'' if r['preset'] == 'fast' else ' (' + r['preset'] + ')'} "
+            f"{r['exponent']:.2f}" for r in sc["stacks"] if math.isfinite(r["exponent"]))
+            + "".join(f"; {r['engine']} {r['preset']}: " + "; ".join(r["notes"])
+                      for r in sc["stacks"] if r["notes"] and not math.isfinite(r["exponent"]))
+            + " |")
     if sc.get("jobs"):
         j = sc["jobs"]
         rows.append(f"| matrix throughput vs --jobs | 2 workers: {j['speedup']:.2f}× "

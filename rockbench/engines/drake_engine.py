@@ -221,7 +221,9 @@ class DrakeEngine(Engine):
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
         # TAMSI is ~4x cheaper per step than SAP; SAP at 1 ms: +3.3 % on a pulse peak.
-        # TAMSI with 4 slices: mirrored 3 Hz / ±8 mm pulses differ by 0.035 λ; 2: 0.0075 λ
+        # TAMSI with 4 slices: mirrored 3 Hz / ±8 mm pulses differ by 0.035 λ; 2: 0.0075 λ.
+        # TAMSI's Newton iteration fails on resting stacks of ≥ 4 blocks (a crash, with
+        # Drake's message); SAP (accurate) handles them
         "fast": {"timestep": 5.0e-4, "contact_approximation": "tamsi", "collision_slices": 2},
     }
     install_hint: ClassVar[str] = "pip install drake"
