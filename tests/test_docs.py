@@ -34,3 +34,21 @@ def test_readme_names_only_existing_suites_and_commands():
         assert suite in suites() or suite == "paper-sensitivity", suite
     for cmd in re.findall(r"^(?:\S*/)?rockbench ([a-z]+)", code, flags=re.M):
         assert cmd in COMMANDS, cmd
+
+
+def test_readme_commands_parse():
+    # every `rockbench ...` line of the README is accepted by the real parser
+    # (options that were renamed or removed would fail here, nothing is run)
+    import shlex
+
+    from rockbench.cli import build_parser
+
+    text = (ROOT / "README.md").read_text()
+    code = "\n".join(re.findall(r"```bash\n(.*?)```", text, flags=re.S))
+    lines = [ln.split("#", 1)[0] for ln in code.splitlines()]
+    commands = [shlex.split(ln.split("rockbench ", 1)[1]) for ln in lines if "rockbench " in ln]
+    assert len(commands) >= 10
+    parser = build_parser()
+    for argv in commands:
+        argv = [a for a in argv if a != "&&"]
+        parser.parse_args(argv)  # SystemExit (status 2) on an unknown option
