@@ -113,7 +113,8 @@ def run(quick: bool = False, repeat: int | None = None) -> tuple[str, dict]:
         f"least {repeat}, and enough for {MIN_TIME:g} s per case: the runs column), "
         f"{load()} at the end of this section. Times are CPU µs per physics step "
         "(build included, the same for both; best run); overhead = simulate / raw − 1 on CPU "
-        f"time, the median of the rounds' paired ratios (goal ≤ {100 * GOAL:.0f} %). Δθ: max |θ_simulate − θ_raw| / λ (0: bit-identical).",
+        f"time, the median of the rounds' paired ratios (goal ≤ {100 * GOAL:.0f} %). "
+        "Δθ: max |θ_simulate − θ_raw| / λ (0: bit-identical).",
         "",
         "| engine | case | steps | runs | simulate µs/step | raw µs/step | overhead | notes |",
         "|---|---|---|---|---|---|---|---|",
