@@ -152,6 +152,23 @@ def test_watchdog_cuts_at_the_first_bad_sample_across_chunks(carry, at):
     assert "NaN" in nan.message and nan.t[-1] == pytest.approx(at)
 
 
+def test_watchdog_sees_nan_in_every_pose_component():
+    # y and the wobble components enter no physical bound; NaN there is still caught
+    sc = Scenario("f", B, initial_tilt=0.5, duration=1.0, output_rate=100.0)
+    c, th = sc.initial_poses()
+    poses = np.zeros((11, 1, 7))
+    poses[:, 0, 0], poses[:, 0, 2] = c[0, 0], c[0, 1]
+    poses[:, 0, 3], poses[:, 0, 5] = math.cos(th / 2), math.sin(th / 2)
+    t = np.arange(1, 11) / 100.0
+    assert _Watchdog(sc).check(poses, t) is None
+    for col in range(7):
+        bad = poses.copy()
+        bad[4, 0, col] = np.nan
+        with np.errstate(invalid="ignore"):
+            j, (status, msg) = _Watchdog(sc).check(bad, t)
+        assert (j, status) == (3, Status.UNSTABLE) and "NaN" in msg, col
+
+
 def test_an_engine_that_cannot_hold_the_base_keeps_driving_it(carry):
     class Unfixed(CarryEngine):
         def _fix_base(self):

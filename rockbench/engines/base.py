@@ -364,7 +364,7 @@ class _Watchdog:
         """First failing sample of a chunk (index within the chunk, verdict), or None.
 
         The common case, a chunk that passes, costs a fixed two dozen NumPy
-        calls whatever the chunk's length, ending in five reductions that NaN
+        calls whatever the chunk's length, ending in six reductions that NaN
         makes fail, so it is caught too. Only a failing chunk is searched
         sample by sample for the first offence and its reason.
 
@@ -389,12 +389,14 @@ class _Watchdog:
         far2 = (x - self.x0) ** 2 + (z - self.z0) ** 2
         height = z @ self.masses if self.free else None
         # (array methods: np.max's Python wrapper costs as much as the reduction)
+        # (y enters no bound: a sum that NaN or infinity makes non-finite covers it)
         if (move2.max() <= self.move2 and cos_turn.min() >= self.cos_turn
                 and r22.min() > 0.0 and far2.max() <= self.reach2
-                and (height is None or height.max() <= self.z_limit)):
+                and (height is None or height.max() <= self.z_limit)
+                and math.isfinite(poses[1:, :, 1].sum())):
             return None
         # the same quantities sample by sample, for the first offence and its reason
-        finite = np.isfinite(poses[1:, :, [0, 2, 3, 4, 5, 6]]).all(axis=(1, 2))
+        finite = np.isfinite(poses[1:]).all(axis=(1, 2))
         far = (far2 > self.reach2).any(axis=1)
         fast = ((move2 > self.move2) | (cos_turn < self.cos_turn)).any(axis=1)
         over = r22 <= 0.0
