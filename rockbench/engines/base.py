@@ -7,7 +7,14 @@ Contract for implementers (the numbered rules that every plugin follows)
    frozen :class:`~rockbench.engines.settings.EngineSettings` dataclass whose
    defaults are calibrated) and ``presets`` (at least ``"accurate"`` and
    ``"fast"``, each a mapping of knob overrides, possibly empty).
-2. Implement :meth:`version` (the library's version string).
+2. Declare ``requires`` (import names of the libraries) and ``extra`` (the
+   rockbench extra that installs them). Never import a library at module level:
+   import it through :meth:`library` (which raises
+   :class:`~rockbench.errors.EngineUnavailable` with the ``pip install`` hint),
+   so that a missing library lists the engine as unavailable, never a crash.
+   Implement :meth:`version` (the library's version string). Declare checks of
+   the conformance kit the engine is known to fail in ``known_failures``
+   (check name -> measured reason).
 3. Implement :meth:`_build`: create the minimal scene for the scenario: one
    collision shape per block (box, or convex prism if chamfered), a ground/base
    body whose top face is the plane z = 0, friction and restitution from
@@ -38,22 +45,50 @@ Contract for implementers (the numbered rules that every plugin follows)
 
 from __future__ import annotations
 
+import importlib
 import math
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
+from types import ModuleType
 from typing import Any, ClassVar
 
 import numpy as np
 
 from rockbench.bounds import SpeedBound
 from rockbench.engines.settings import EngineSettings, SettingsError
-from rockbench.errors import UnsupportedScenario
+from rockbench.errors import EngineUnavailable, UnsupportedScenario
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["Engine", "Capabilities", "angles_from_quaternions"]
+__all__ = ["Engine", "Capabilities", "angles_from_quaternions", "require_library"]
+
+
+def require_library(module: str, *, engine: str, extra: str = "") -> ModuleType:
+    """Import an engine's library, or raise :class:`EngineUnavailable` with the install hint.
+
+    Any failure of the import counts (a missing package, a broken binary wheel, a
+    missing shared library), since each leaves the engine unusable.
+
+    Parameters
+    ----------
+    module : str
+        Import name of the library (``"mujoco"``, ``"pydrake.all"``).
+    engine : str
+        Engine name, for the message.
+    extra : str
+        rockbench extra that installs it (hint ``pip install 'rockbench[extra]'``);
+        empty: the hint names the module.
+    """
+    try:
+        return importlib.import_module(module)
+    except Exception as exc:  # an engine library can fail in many ways on import
+        hint = f"pip install 'rockbench[{extra}]'" if extra else f"pip install {module}"
+        raise EngineUnavailable(
+            f"engine {engine!r} is unavailable: cannot import {module} "
+            f"({type(exc).__name__}: {exc}); install it with: {hint}"
+        ) from exc
 
 
 @dataclass(frozen=True)
@@ -102,14 +137,30 @@ class Engine(ABC):
     capabilities: ClassVar[Capabilities] = Capabilities()
     Settings: ClassVar[type[EngineSettings]]
     presets: ClassVar[Mapping[str, Mapping[str, Any]]] = {"accurate": {}, "fast": {}}
-    #: Extra `pip install` hint shown when the library is missing.
-    install_hint: ClassVar[str] = ""
+    #: The rockbench extra that installs the library (``pip install 'rockbench[extra]'``).
+    extra: ClassVar[str] = ""
+    #: Import names of the libraries the engine needs (checked by :meth:`check_available`).
+    requires: ClassVar[tuple[str, ...]] = ()
+    #: Conformance checks this engine is known to fail: check name -> measured reason.
+    #: The test suites mark them as strict expected failures.
+    known_failures: ClassVar[Mapping[str, str]] = {}
 
     # ------------------------------------------------------------------ public API
     @classmethod
+    def library(cls, module: str) -> ModuleType:
+        """Import one of the engine's libraries (rule 2): :func:`require_library`."""
+        return require_library(module, engine=cls.name, extra=cls.extra)
+
+    @classmethod
+    def check_available(cls) -> None:
+        """Raise :class:`EngineUnavailable` if a library in ``requires`` cannot be imported."""
+        for module in cls.requires:
+            cls.library(module)
+
+    @classmethod
     @abstractmethod
     def version(cls) -> str:
-        """Version of the underlying library."""
+        """Version of the underlying library (may raise :class:`EngineUnavailable`)."""
 
     @classmethod
     def settings(cls, preset: str | None = None, **overrides: Any) -> EngineSettings:
