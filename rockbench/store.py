@@ -1,11 +1,19 @@
 """Results store: every run appended to a SQLite database as it finishes.
 
-One row per run in table ``runs``: scenario name and content hash, engine,
-engine version, requested and effective settings, status, message, metrics
-(JSON), wall time, machine, timestamp (UTC, ISO 8601), rockbench version, the
-command that produced it (``kind``: matrix, sweep, tune) and a session id.
-Rows are committed one by one, so an interrupted matrix loses nothing and
-``--resume`` can skip cells already done (:meth:`Store.find`).
+Every study (``compare``, ``matrix``, ``sweep``, ``tune``, ...) records each
+finished run here: one row per run in table ``runs``: scenario name and content
+hash, engine, method label, preset and variation, engine version, requested and
+effective settings, status, message, the run's
+:class:`~rockbench.evaluation.RunMetrics` (JSON), wall and CPU time, the
+trajectory file when the study keeps one (path relative to the store), machine,
+timestamp (UTC, ISO 8601), rockbench version, the command that produced it
+(``kind``) and a session id. Rows are committed one by one, so an interrupted
+study loses nothing and ``--resume`` can skip runs already done
+(:meth:`Store.find`).
+
+A file that exists and is not a rockbench store (another application's SQLite
+database, or not SQLite at all) is refused and never modified: the store marks
+its files with a SQLite ``application_id``.
 
 Table ``refs`` caches analytic reference trajectories by scenario content hash
 and rockbench version (the analytic models are versioned with rockbench).
@@ -34,6 +42,8 @@ import numpy as np
 
 import rockbench
 from rockbench.errors import RockbenchError
+from rockbench.evaluation import RunMetrics
+from rockbench.method import Method
 from rockbench.scenarios import Scenario, scenario_to_dict
 from rockbench.trajectory import Status, Trajectory
 
@@ -42,7 +52,13 @@ __all__ = ["Store", "RunRecord", "StoreError", "scenario_hash", "settings_key", 
 
 #: Default database file (in the current directory).
 DEFAULT_DB = "rockbench.db"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+#: SQLite ``application_id`` of rockbench stores ("RkBn").
+APPLICATION_ID = 0x526B426E
+#: Columns added by schema 2 (a schema-1 store is upgraded in place).
+_V2_COLUMNS = (("method", "TEXT NOT NULL DEFAULT ''"), ("preset", "TEXT NOT NULL DEFAULT ''"),
+               ("variation", "TEXT NOT NULL DEFAULT ''"), ("cpu_time", "REAL"),
+               ("trajectory", "TEXT NOT NULL DEFAULT ''"))
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT);
@@ -64,7 +80,12 @@ CREATE TABLE IF NOT EXISTS runs (
     wall_time REAL,
     machine TEXT NOT NULL,
     timestamp TEXT NOT NULL,
-    rockbench_version TEXT NOT NULL
+    rockbench_version TEXT NOT NULL,
+    method TEXT NOT NULL DEFAULT '',
+    preset TEXT NOT NULL DEFAULT '',
+    variation TEXT NOT NULL DEFAULT '',
+    cpu_time REAL,
+    trajectory TEXT NOT NULL DEFAULT ''
 );
 CREATE INDEX IF NOT EXISTS runs_cell ON runs (scenario_hash, engine, settings_key);
 CREATE INDEX IF NOT EXISTS runs_name ON runs (scenario, engine);
@@ -139,7 +160,11 @@ def _now() -> str:
 
 @dataclass(frozen=True)
 class RunRecord:
-    """One stored run (a row of table ``runs``)."""
+    """One stored run (a row of table ``runs``).
+
+    ``metrics`` is None for a row whose metrics cannot be read back (written by
+    another rockbench version with other fields): its status still counts.
+    """
 
     id: int
     session: str
@@ -148,17 +173,69 @@ class RunRecord:
     scenario: str
     scenario_hash: str
     engine: str
+    method: str
+    preset: str
+    variation: str
     engine_version: str
     settings: dict[str, Any]
     settings_key: str
     effective_settings: dict[str, Any]
     status: Status
     message: str
-    metrics: dict[str, Any]
+    metrics: RunMetrics | None
     wall_time: float | None
+    cpu_time: float | None
+    trajectory: str
     machine: str
     timestamp: str
     rockbench_version: str
+
+
+def _metrics(text: str) -> RunMetrics | None:
+    try:
+        return RunMetrics.from_json(json.loads(text))
+    except (ValueError, KeyError, TypeError):  # a schema-1 row or another version's fields
+        return None
+
+
+_COLUMNS = ("id, session, kind, suite, scenario, scenario_hash, engine, method, preset, "
+            "variation, engine_version, settings, settings_key, effective_settings, status, "
+            "message, metrics, wall_time, cpu_time, trajectory, machine, timestamp, "
+            "rockbench_version")
+
+
+def _check_foreign(path: Path, *, reader: bool) -> None:
+    """Refuse, without writing to it, a file that is not a rockbench store.
+
+    A missing or empty file becomes a new store for a writer; a reader
+    (``reader=True``) needs an existing rockbench store.
+    """
+    if not path.exists() or path.stat().st_size == 0:
+        if reader and path.exists():
+            raise StoreError(f"{path}: an empty file, not a rockbench results store")
+        return
+    try:
+        with path.open("rb") as fh:
+            head = fh.read(16)
+    except OSError as exc:
+        raise StoreError(f"{path}: cannot read the results store ({exc.strerror})") from None
+    if head != b"SQLite format 3\x00":
+        raise StoreError(f"{path}: not a rockbench results store (not an SQLite file); "
+                         "refusing to modify it: choose another --db")
+    try:
+        ro = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=30.0)
+        try:
+            app = ro.execute("PRAGMA application_id").fetchone()[0]
+            tables = {r[0] for r in ro.execute(
+                "SELECT name FROM sqlite_master WHERE type = 'table'")}
+        finally:
+            ro.close()
+    except sqlite3.DatabaseError as exc:
+        raise StoreError(f"{path}: not a usable results database ({exc})") from None
+    legacy = app == 0 and {"meta", "runs"} <= tables  # schema 1 had no application_id
+    if app != APPLICATION_ID and not legacy and (tables or reader):
+        raise StoreError(f"{path}: not a rockbench results store (an SQLite database of "
+                         "another application); refusing to modify it: choose another --db")
 
 
 class Store:
@@ -170,32 +247,57 @@ class Store:
         Database file (created if missing); ``":memory:"`` for a throw-away store.
     session : str, optional
         Id shared by the runs of one command invocation (default: a new one).
+    create : bool
+        Create the file if it does not exist (False for readers such as
+        ``rockbench history``: a missing file is an error).
 
     Raises
     ------
     StoreError
-        The file cannot be opened or is not a rockbench database.
+        The file cannot be opened, or is not a rockbench database (it is then
+        left untouched).
     """
 
-    def __init__(self, path: str | Path = DEFAULT_DB, *, session: str | None = None) -> None:
+    def __init__(self, path: str | Path = DEFAULT_DB, *, session: str | None = None,
+                 create: bool = True) -> None:
         self.path = str(path)
         self.session = session or uuid.uuid4().hex[:12]
         self.machine = machine()
         if self.path != ":memory:":
-            Path(self.path).parent.mkdir(parents=True, exist_ok=True)
+            p = Path(self.path)
+            if not create and not p.exists():
+                raise StoreError(f"no results store at {self.path} (run a study first, "
+                                 "or pass --db)")
+            if p.is_dir():
+                raise StoreError(f"{self.path}: is a directory, expected a results store file")
+            _check_foreign(p, reader=not create)
+            try:
+                p.parent.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                raise StoreError(f"{self.path}: cannot create the results store's folder "
+                                 f"({exc.strerror})") from None
         try:
             self.db = sqlite3.connect(self.path, timeout=30.0)
             self.db.execute("PRAGMA journal_mode=WAL")
-            self.db.executescript(_SCHEMA)
-            row = self.db.execute("SELECT value FROM meta WHERE key='schema'").fetchone()
-            if row is None:
-                self.db.execute("INSERT INTO meta VALUES ('schema', ?)", (str(SCHEMA_VERSION),))
-                self.db.commit()
-            elif int(row[0]) > SCHEMA_VERSION:
-                raise StoreError(f"{self.path}: results store schema {row[0]} is newer than "
-                                 f"this rockbench ({SCHEMA_VERSION}); upgrade rockbench")
-        except sqlite3.DatabaseError as exc:
+            self._upgrade()
+        except sqlite3.DatabaseError as exc:  # includes an unwritable location
             raise StoreError(f"{self.path}: not a usable results database ({exc})") from None
+
+    def _upgrade(self) -> None:
+        self.db.executescript(_SCHEMA)
+        row = self.db.execute("SELECT value FROM meta WHERE key='schema'").fetchone()
+        if row is not None and int(row[0]) > SCHEMA_VERSION:
+            raise StoreError(f"{self.path}: results store schema {row[0]} is newer than "
+                             f"this rockbench ({SCHEMA_VERSION}); upgrade rockbench")
+        if row is not None and int(row[0]) < 2:
+            have = {r[1] for r in self.db.execute("PRAGMA table_info(runs)")}
+            for name, decl in _V2_COLUMNS:
+                if name not in have:
+                    self.db.execute(f"ALTER TABLE runs ADD COLUMN {name} {decl}")
+        self.db.execute("INSERT OR REPLACE INTO meta VALUES ('schema', ?)",
+                        (str(SCHEMA_VERSION),))
+        self.db.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+        self.db.commit()
 
     # ------------------------------------------------------------------ lifecycle
     def close(self) -> None:
@@ -212,14 +314,13 @@ class Store:
     def record(
         self,
         scenario: Scenario,
-        engine: str,
-        settings: Mapping[str, Any],
+        method: Method,
         traj: Trajectory,
-        metrics: Mapping[str, Any],
+        metrics: RunMetrics,
         *,
         kind: str,
         suite: str = "",
-        engine_version: str | None = None,
+        trajectory: str = "",
     ) -> int:
         """Append one finished run and commit at once; returns its row id.
 
@@ -227,62 +328,68 @@ class Store:
         ----------
         scenario : Scenario
             What was simulated.
-        engine : str
-            Engine name.
-        settings : mapping
-            The requested settings (overrides, maybe ``preset``): the cell key.
+        method : Method
+            Engine and requested settings (the cell key).
         traj : Trajectory
-            The result (status, message, wall time, effective settings).
-        metrics : mapping
-            JSON-able metrics of the run.
+            The result (effective settings).
+        metrics : RunMetrics
+            From :func:`rockbench.evaluation.evaluate_run`.
         kind : str
-            The command that ran it (``matrix``, ``sweep``, ``tune``...).
+            The study that ran it (``compare``, ``matrix``, ``sweep``, ``tune``...).
         suite : str
             Suite name, if any.
-        engine_version : str, optional
-            Overrides ``traj.engine_version`` (empty for runs that never started).
+        trajectory : str
+            The trajectory file kept for the run, if any.
         """
-        version = engine_version if engine_version is not None else traj.engine_version
+        settings = method.settings
         cur = self.db.execute(
-            "INSERT INTO runs (session, kind, suite, scenario, scenario_hash, engine, "
-            "engine_version, settings, settings_key, effective_settings, status, message, "
-            "metrics, wall_time, machine, timestamp, rockbench_version) "
-            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-            (self.session, kind, suite, scenario.name, scenario_hash(scenario), engine,
-             version or "", _canonical(dict(settings)), settings_key(settings),
-             _canonical(traj.settings), traj.status.value, traj.message, _canonical(metrics),
-             float(traj.wall_time), self.machine, _now(), rockbench.__version__),
+            "INSERT INTO runs (session, kind, suite, scenario, scenario_hash, engine, method, "
+            "preset, variation, engine_version, settings, settings_key, effective_settings, "
+            "status, message, metrics, wall_time, cpu_time, trajectory, machine, timestamp, "
+            "rockbench_version) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, "
+            "?, ?, ?, ?)",
+            (self.session, kind, suite, scenario.name, scenario_hash(scenario), method.engine,
+             method.label, method.preset, method.variation, metrics.engine_version,
+             _canonical(settings), settings_key(settings), _canonical(traj.settings),
+             metrics.status.value, metrics.message, _canonical(metrics.to_json()),
+             metrics.wall_time, metrics.cpu_time, trajectory, self.machine, _now(),
+             rockbench.__version__),
         )
         self.db.commit()
         return int(cur.lastrowid or 0)
 
     def find(
-        self, scenario: Scenario, engine: str, settings: Mapping[str, Any], *,
+        self, scenario: Scenario, method: Method, *,
         engine_version: str | None = None, rockbench_version: str | None = None,
     ) -> RunRecord | None:
-        """The latest stored run of a cell, or None.
+        """The latest stored run of a cell whose metrics can be read, or None.
 
-        A cell is the scenario content, the engine, the requested settings and,
-        when given, the engine and rockbench versions (``--resume`` passes the
-        current ones, so upgrading either reruns the cell).
+        A cell is the scenario content, the engine, the requested settings, the
+        variation and, when given, the engine and rockbench versions
+        (``--resume`` passes the current ones, so upgrading either reruns it).
         """
-        sql = ("SELECT * FROM runs WHERE scenario_hash = ? AND engine = ? AND settings_key = ?")
-        args: list[Any] = [scenario_hash(scenario), engine, settings_key(settings)]
+        sql = (f"SELECT {_COLUMNS} FROM runs WHERE scenario_hash = ? AND engine = ? "
+               "AND settings_key = ? AND variation = ?")
+        args: list[Any] = [scenario_hash(scenario), method.engine, settings_key(method.settings),
+                           method.variation]
         if engine_version is not None:
             sql += " AND engine_version = ?"
             args.append(engine_version)
         if rockbench_version is not None:
             sql += " AND rockbench_version = ?"
             args.append(rockbench_version)
-        row = self.db.execute(sql + " ORDER BY id DESC LIMIT 1", args).fetchone()
-        return None if row is None else self._row(row)
+        for row in self.db.execute(sql + " ORDER BY id DESC LIMIT 20", args):
+            rec = self._row(row)
+            if rec.metrics is not None:
+                return rec
+        return None
 
     def runs(
         self, *, scenario: str | None = None, engine: str | None = None,
         kind: str | None = None, session: str | None = None, limit: int | None = None,
     ) -> list[RunRecord]:
         """Stored runs, oldest first, filtered by scenario name, engine, kind or session."""
-        sql, args = "SELECT * FROM runs WHERE 1=1", []
+        sql, args = f"SELECT {_COLUMNS} FROM runs WHERE 1=1", []
         for col, val in (("scenario", scenario), ("engine", engine), ("kind", kind),
                          ("session", session)):
             if val is not None:
@@ -303,10 +410,11 @@ class Store:
     def _row(r: tuple[Any, ...]) -> RunRecord:
         return RunRecord(
             id=r[0], session=r[1], kind=r[2], suite=r[3], scenario=r[4], scenario_hash=r[5],
-            engine=r[6], engine_version=r[7], settings=json.loads(r[8]), settings_key=r[9],
-            effective_settings=json.loads(r[10]), status=Status(r[11]), message=r[12],
-            metrics=json.loads(r[13]), wall_time=r[14], machine=r[15], timestamp=r[16],
-            rockbench_version=r[17],
+            engine=r[6], method=r[7] or r[6], preset=r[8], variation=r[9], engine_version=r[10],
+            settings=json.loads(r[11]), settings_key=r[12], effective_settings=json.loads(r[13]),
+            status=Status(r[14]), message=r[15], metrics=_metrics(r[16]), wall_time=r[17],
+            cpu_time=r[18], trajectory=r[19], machine=r[20], timestamp=r[21],
+            rockbench_version=r[22],
         )
 
     # ------------------------------------------------------------------ references

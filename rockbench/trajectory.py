@@ -75,6 +75,8 @@ class Trajectory:
         Reason for a non-ok status, or a note.
     wall_time : float
         Wall-clock time of the simulation in s.
+    cpu_time : float
+        CPU time of the process during the simulation in s (0 where unmeasured).
     engine, engine_version : str
         Who produced it.
     settings : dict
@@ -95,6 +97,7 @@ class Trajectory:
     status: Status = Status.OK
     message: str = ""
     wall_time: float = 0.0
+    cpu_time: float = 0.0
     engine: str = ""
     engine_version: str = ""
     settings: dict[str, Any] = field(default_factory=dict)
@@ -140,6 +143,7 @@ class Trajectory:
             "status": self.status.value,
             "message": self.message,
             "wall_time": self.wall_time,
+            "cpu_time": self.cpu_time,
             "n_blocks": self.n_blocks,
             "impacts": None if self.impacts is None else self.impacts.tolist(),
             "extra": self.extra,
@@ -204,7 +208,8 @@ class Trajectory:
         }
         return cls(
             t=cols["t"], **arrays, status=Status(meta["status"]), message=meta["message"],
-            wall_time=meta["wall_time"], engine=meta["engine"],
+            wall_time=meta["wall_time"], cpu_time=meta.get("cpu_time", 0.0),
+            engine=meta["engine"],
             engine_version=meta["engine_version"], settings=meta["settings"],
             scenario=meta["scenario"], impacts=meta.get("impacts"), extra=meta.get("extra", {}),
         )

@@ -1,0 +1,294 @@
+"""One typed result per run: :class:`RunMetrics`, computed by :func:`evaluate_run` only.
+
+Every study, table, figure, CSV/JSON file, JUnit file, tolerance check and the
+results store read a run's numbers from a :class:`RunMetrics`; no metric is
+computed anywhere else. Definitions (angles normalised by the scenario's λ):
+
+* ``peaks``: max |θ_i|/λ per block (bottom first).
+* ``max_error``: max |θ − θ_ref|/λ over all blocks and common samples; when the
+  reference overturns, only until the reference passes λ (beyond it the fall is
+  no rocking comparison). ``max_error_early``: the same up to the reference's
+  third impact.
+* impacts (:func:`rocking_impacts`, one definition for engines and references):
+  the zero crossings of the bottom block's θ, linearly interpolated between
+  samples, counted only once |θ| reached :data:`IMPACT_THRESHOLD` λ since the
+  previous counted crossing (contact jitter before uplift is not an impact).
+  ``impact_time_errors``: relative errors of the first :data:`N_IMPACTS`
+  reference impacts (None where the run lacks one, counted in
+  ``impacts_missing``).
+* ``peak_errors``: signed (p_i − r_i) / max(r_i, :data:`PEAK_FLOOR`) per block
+  against a reference that ends ``ok``: the floor keeps a reference that barely
+  lifts (a few thousandths of λ) from turning noise into huge relative errors.
+  ``peak_error``: the largest magnitude.
+* ``time_to_rest``: first time after which every |θ| stays below 0.01 λ.
+* ``realtime_factor``: simulated seconds per wall second of the run (the
+  samples the run produced, not the duration requested).
+* ``slide``: the bottom block's largest departure from rigid rocking
+  kinematics (sliding or contact drift, m); ``max_wobble``: largest out-of-plane
+  rotation (rad).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, fields
+from typing import Any
+
+import numpy as np
+
+from rockbench import metrics
+from rockbench.scenarios import Scenario
+from rockbench.trajectory import Status, Trajectory
+
+__all__ = ["RunMetrics", "evaluate_run", "rocking_impacts", "sliding", "finite_or_none",
+           "IMPACT_THRESHOLD", "PEAK_FLOOR", "N_IMPACTS", "NUMERIC_METRICS"]
+
+#: A zero crossing of θ is an impact only after |θ| reached this fraction of λ.
+IMPACT_THRESHOLD = 0.01
+#: Floor (fraction of λ) under the reference peak in relative peak errors.
+PEAK_FLOOR = 0.02
+#: Number of first impacts whose times are compared.
+N_IMPACTS = 3
+
+
+def finite_or_none(x: Any) -> float | None:
+    """``x`` as a finite float, or None (the one convention for undefined numbers)."""
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None
+
+
+def rocking_impacts(traj: Trajectory, lam: float, block: int = 0,
+                    threshold: float = IMPACT_THRESHOLD) -> np.ndarray:
+    """Impact times of a block: zero crossings of θ after it rocked beyond ``threshold`` λ."""
+    if traj.t.size < 2:
+        return np.zeros(0)
+    return metrics.zero_crossings(traj.t, traj.theta[:, block], threshold * lam)
+
+
+def sliding(traj: Trajectory, scenario: Scenario) -> float | None:
+    """Largest sliding of the bottom block on the base (m), None if positions are unknown.
+
+    A block that rocks without sliding has its centroid where the rigid
+    rotation about its active pivot puts it: ``x = u_g + s b' − s b' cos θ +
+    h sin θ`` (``s = sgn θ``, ``b'`` the pivot half-width, ``h`` the half-height,
+    ``u_g`` the base displacement). The largest departure from it measures
+    sliding or drift of the contact. Only samples where the block is within its
+    critical angle count (an overturning block slides when it lands).
+    """
+    if traj.t.size == 0 or not np.all(np.isfinite(traj.x[:, 0])):
+        return None
+    b = scenario.blocks[0]
+    th = traj.theta[:, 0]
+    sgn = np.sign(th)
+    u = np.asarray(scenario.excitation.displacement(traj.t), float)
+    x_kin = (u + scenario.stack.offsets[0] + sgn * b.pivot_half_width
+             - sgn * b.pivot_half_width * np.cos(th) + b.h * np.sin(th))
+    keep = np.abs(th) <= b.rocking(scenario.g).lam  # not falling over
+    return float(np.max(np.abs(traj.x[keep, 0] - x_kin[keep]))) if keep.any() else None
+
+
+def _floats(values: Any) -> tuple[float | None, ...]:
+    return tuple(finite_or_none(v) for v in values)
+
+
+@dataclass(frozen=True)
+class RunMetrics:
+    """Everything measured of one run (see the module docstring for the definitions).
+
+    Undefined numbers are None (no reference, no samples, a reference that
+    overturned where a peak error is asked for, ...); ``error_note`` says why the
+    errors are missing when they are.
+    """
+
+    status: Status
+    message: str
+    n_blocks: int
+    critical_angle: float
+    duration: float
+    peaks: tuple[float | None, ...]
+    simulated_time: float
+    n_samples: int
+    wall_time: float
+    cpu_time: float | None
+    realtime_factor: float | None
+    time_to_rest: float | None
+    max_wobble: float | None
+    slide: float | None
+    engine_version: str = ""
+    settings_hash: str = ""
+    scenario_hash: str = ""
+    reference_status: Status | None = None
+    reference_time_to_rest: float | None = None
+    max_error: float | None = None
+    max_error_early: float | None = None
+    peak_errors: tuple[float | None, ...] = ()
+    peak_error: float | None = None
+    impact_time_errors: tuple[float | None, ...] = ()
+    impact_time_error: float | None = None
+    impacts_missing: int | None = None
+    error_note: str = ""
+
+    @property
+    def completed(self) -> bool:
+        """The run ended ``ok`` or ``overturned``."""
+        return self.status.completed
+
+    @property
+    def time_per_simulated_second(self) -> float | None:
+        """Wall seconds per simulated second (the inverse of the real-time factor)."""
+        return (self.wall_time / self.simulated_time
+                if self.simulated_time > 0 and self.wall_time > 0 else None)
+
+    @property
+    def cpu_per_simulated_second(self) -> float | None:
+        """CPU seconds per simulated second (None where CPU time was not measured)."""
+        return (self.cpu_time / self.simulated_time
+                if self.cpu_time and self.simulated_time > 0 else None)
+
+    def value(self, name: str) -> float | None:
+        """A scalar metric by name (tolerance and baseline files name them).
+
+        Raises
+        ------
+        KeyError
+            ``name`` is not one of :data:`NUMERIC_METRICS`.
+        """
+        if name not in NUMERIC_METRICS:
+            raise KeyError(name)
+        return finite_or_none(getattr(self, name))
+
+    def to_json(self) -> dict[str, Any]:
+        """Plain JSON-able form (the store's and baselines' format)."""
+        out = asdict(self)
+        out["status"] = self.status.value
+        out["reference_status"] = (None if self.reference_status is None
+                                   else self.reference_status.value)
+        for k in ("peaks", "peak_errors", "impact_time_errors"):
+            out[k] = list(out[k])
+        return out
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> RunMetrics:
+        """Inverse of :meth:`to_json` (unknown keys ignored, missing ones defaulted).
+
+        Raises
+        ------
+        ValueError
+            A status that is not one of :class:`Status`, or a missing required field.
+        """
+        names = {f.name for f in fields(cls)}
+        kw = {k: v for k, v in data.items() if k in names}
+        kw["status"] = Status(kw["status"])
+        ref = kw.get("reference_status")
+        kw["reference_status"] = None if ref is None else Status(ref)
+        for k in ("peaks", "peak_errors", "impact_time_errors"):
+            if k in kw:
+                kw[k] = _floats(kw[k] or ())
+        try:
+            return cls(**kw)
+        except TypeError as exc:
+            raise ValueError(f"incomplete run metrics: {exc}") from None
+
+
+#: Scalar metrics that tolerance and baseline files may name.
+NUMERIC_METRICS = frozenset({
+    "max_error", "max_error_early", "peak_error", "impact_time_error", "impacts_missing",
+    "time_to_rest", "reference_time_to_rest", "wall_time", "cpu_time", "realtime_factor",
+    "slide", "max_wobble", "simulated_time",
+})
+
+
+def evaluate_run(scenario: Scenario, traj: Trajectory, reference: Trajectory | None, *,
+                 is_reference: bool = False, settings_hash: str = "", scenario_hash: str = "",
+                 engine_version: str = "", reference_note: str = "") -> RunMetrics:
+    """The metrics of one run against the analytic reference (the only metric function).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        What was simulated.
+    traj : Trajectory
+        The run's result.
+    reference : Trajectory or None
+        The analytic reference of the scenario (None if there is none).
+    is_reference : bool
+        ``traj`` is the reference itself: no errors are computed.
+    settings_hash, scenario_hash, engine_version : str
+        Identity of the run, stored with it.
+    reference_note : str
+        Why there is no usable reference (kept as ``error_note``).
+    """
+    lam = scenario.critical_angle
+    n = traj.t.size
+    simulated = float(traj.t[-1]) if n else 0.0
+    wall = float(traj.wall_time)
+    base: dict[str, Any] = dict(
+        status=traj.status, message=traj.message, n_blocks=scenario.n_blocks,
+        critical_angle=lam, duration=scenario.duration,
+        peaks=_floats(metrics.peak_ratio(traj, lam)) if n else (None,) * scenario.n_blocks,
+        simulated_time=simulated, n_samples=int(n), wall_time=wall,
+        cpu_time=finite_or_none(traj.cpu_time) if traj.cpu_time else None,
+        realtime_factor=simulated / wall if wall > 0 and simulated > 0 else None,
+        time_to_rest=finite_or_none(metrics.time_to_rest(traj, lam)) if n else None,
+        max_wobble=finite_or_none(np.max(np.abs(traj.wobble))) if n else None,
+        slide=sliding(traj, scenario),
+        engine_version=engine_version or traj.engine_version, settings_hash=settings_hash,
+        scenario_hash=scenario_hash,
+    )
+    if is_reference:
+        return RunMetrics(**base, error_note="reference")
+    if reference is None or not reference.t.size or not reference.status.completed:
+        note = reference_note or (f"no analytic reference ({reference.status}: "
+                                  f"{reference.message})" if reference is not None
+                                  else "no analytic reference")
+        return RunMetrics(**base, reference_status=None if reference is None
+                          else reference.status, error_note=note)
+    base["reference_status"] = reference.status
+    base["reference_time_to_rest"] = finite_or_none(metrics.time_to_rest(reference, lam))
+    if not n or not traj.status.completed:
+        return RunMetrics(**base, error_note=f"{traj.status}: {traj.message}")
+    t_end: float | None = None
+    if reference.status is Status.OVERTURNED:
+        past = np.nonzero(np.max(np.abs(reference.theta), axis=1) > lam)[0]
+        t_end = float(reference.t[past[0]]) if past.size else None
+    try:
+        max_error = metrics.max_error(traj, reference, lam, t_end)
+    except ValueError as exc:  # sampled at other times
+        return RunMetrics(**base, error_note=str(exc))
+    ref_imp = rocking_impacts(reference, lam)
+    if t_end is not None:
+        ref_imp = ref_imp[ref_imp <= t_end]
+    early = float(ref_imp[N_IMPACTS - 1]) if ref_imp.size >= N_IMPACTS else t_end
+    if early is not None and t_end is not None:
+        early = min(early, t_end)
+    k = min(N_IMPACTS, ref_imp.size)
+    imp_errors: tuple[float | None, ...] = ()
+    missing: int | None = None
+    if k:
+        eng_imp = rocking_impacts(traj, lam)[:k]
+        errs = np.full(k, np.nan)
+        errs[:eng_imp.size] = np.abs(eng_imp - ref_imp[:eng_imp.size]) / ref_imp[:eng_imp.size]
+        imp_errors = _floats(errs)
+        missing = int(np.sum(~np.isfinite(errs)))
+    peak_errors: tuple[float | None, ...] = ()
+    note = ""
+    if reference.status is Status.OK:
+        p = metrics.peak_ratio(traj, lam)
+        r = metrics.peak_ratio(reference, lam)
+        peak_errors = _floats((p - r) / np.maximum(r, PEAK_FLOOR))
+    else:
+        note = f"reference {reference.status}: {reference.message}"
+    defined = [abs(e) for e in peak_errors if e is not None]
+    imp_defined = [e for e in imp_errors if e is not None]
+    return RunMetrics(
+        **base, max_error=finite_or_none(max_error),
+        max_error_early=finite_or_none(metrics.max_error(traj, reference, lam, early)),
+        peak_errors=peak_errors, peak_error=max(defined) if defined else None,
+        impact_time_errors=imp_errors,
+        impact_time_error=max(imp_defined) if imp_defined else None,
+        impacts_missing=missing, error_note=note,
+    )
