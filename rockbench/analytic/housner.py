@@ -65,16 +65,7 @@ from scipy.special import ellipj, ellipkinc
 import rockbench
 from rockbench.analytic._integrate import integrate_phase
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import (
-    CosinePulse,
-    Excitation,
-    Free,
-    Record,
-    RockingProperties,
-    Scenario,
-    SinePulse,
-    Sinusoid,
-)
+from rockbench.scenarios import Excitation, RockingProperties, Scenario
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = [
@@ -458,72 +449,16 @@ class _Solver:
         return outcome, t_stop, omega
 
 
-def _scalar_candidate(exc: Excitation) -> Callable[[float], float] | None:
-    """Plain-float formulas of the built-in excitations (same definitions as theirs)."""
-    if isinstance(exc, Free):
-        return lambda t: 0.0
-    if isinstance(exc, SinePulse):
-        amp, w, t_end = exc.amplitude * exc.omega**2, exc.omega, exc.end_time
-
-        def pulse(t: float) -> float:
-            return amp * math.sin(w * t) if 0.0 <= t <= t_end else 0.0
-        return pulse
-    if isinstance(exc, CosinePulse):
-        amp, w, t_end = exc.amplitude * exc.omega**2, exc.omega, exc.end_time
-
-        def cos_pulse(t: float) -> float:
-            return amp * math.cos(w * t) if 0.0 <= t <= t_end else 0.0
-        return cos_pulse
-    if isinstance(exc, Sinusoid):
-        amp, w, tr, t_end = exc.amplitude, exc.omega, exc.ramp_time, exc.end_time
-        has_end = exc.duration is not None
-        k = math.pi / tr if tr > 0 else 0.0
-
-        def sinusoid(t: float) -> float:
-            if t < 0.0 or t > t_end:
-                return 0.0
-            win, dwin, ddwin = 1.0, 0.0, 0.0
-            if tr > 0:
-                if has_end and t > t_end - tr:  # ramp down (takes precedence, as in _window)
-                    x, sign = t_end - t, -1.0
-                elif t < tr:
-                    x, sign = t, 1.0
-                else:
-                    x = -1.0
-                if x >= 0.0:
-                    cx, sx = math.cos(k * x), math.sin(k * x)
-                    win, dwin, ddwin = 0.5 * (1.0 - cx), sign * 0.5 * k * sx, 0.5 * k * k * cx
-            s, c = math.sin(w * t), math.cos(w * t)
-            return amp * (-w * w * s * win + 2.0 * w * c * dwin + s * ddwin)
-        return sinusoid
-    if isinstance(exc, Record):
-        times = np.asarray(exc.times, dtype=float)
-        acc = np.asarray(exc.acceleration(times), dtype=float)
-        tl, al = times.tolist(), acc.tolist()
-        slopes = (np.diff(acc) / np.diff(times)).tolist()
-        last, t_end = len(tl) - 2, float(times[-1])
-
-        def record(t: float) -> float:
-            if t < 0.0 or t > t_end:
-                return 0.0
-            i = min(max(bisect_right(tl, t) - 1, 0), last)
-            return al[i] + slopes[i] * (t - tl[i])
-        return record
-    return None
-
-
 def scalar_acceleration(exc: Excitation) -> Callable[[float], float] | None:
     """A fast scalar ü_g(t) for the ODE right-hand side, or None to use ``exc.acceleration``.
 
     Evaluating an excitation's vectorised method on one float costs tens of µs,
-    which dominates long forced integrations. The built-in excitations have
-    plain-``math`` equivalents here; each is checked against
-    ``exc.acceleration`` on a grid (including both sides of every breakpoint)
-    and discarded if they differ by more than 1e-12 of the peak.
+    which dominates long forced integrations. Each excitation gives a plain-float
+    form (:meth:`~rockbench.scenarios.Excitation.scalar_acceleration`); it is
+    checked against ``exc.acceleration`` on a grid (including both sides of every
+    breakpoint) and discarded if they differ by more than 1e-12 of the peak.
     """
-    fast = _scalar_candidate(exc)
-    if fast is None:
-        return None
+    fast = exc.scalar_acceleration()
     end = exc.end_time if math.isfinite(exc.end_time) else 30.0
     bps = np.asarray(exc.breakpoints, dtype=float)
     grid = np.concatenate([np.linspace(-0.1, end + 0.1, 1009), bps, bps * (1 + 1e-12),

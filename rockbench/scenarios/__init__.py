@@ -1,6 +1,7 @@
 """Scenarios: what is simulated (blocks, stacks, contact, base excitation), files and catalog."""
 
 from rockbench.scenarios.excitation import (
+    REPORT_GROUPS,
     STANDARD_GRAVITY,
     CosinePulse,
     Excitation,
@@ -8,12 +9,16 @@ from rockbench.scenarios.excitation import (
     Record,
     SinePulse,
     Sinusoid,
+    excitation_class,
+    excitation_from_table,
+    excitation_kinds,
 )
 from rockbench.scenarios.model import Block, Contact, RockingProperties, Scenario, Stack
 
 __all__ = [
     "Block", "Stack", "Contact", "Scenario", "RockingProperties",
     "Excitation", "Free", "SinePulse", "CosinePulse", "Sinusoid", "Record", "STANDARD_GRAVITY",
+    "REPORT_GROUPS", "excitation_kinds", "excitation_class", "excitation_from_table",
 ]
 from rockbench.scenarios.catalog import (  # noqa: E402
     catalog,

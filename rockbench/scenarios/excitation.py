@@ -5,12 +5,22 @@ integrals of each other (closed forms for pulses and sinusoids, exact piecewise
 polynomial integration for records), so that an engine driven by displacement or
 velocity and an analytic model driven by acceleration see the same motion.
 Functions accept scalars or arrays of times and return the same shape.
+
+Excitations are registered by kind: a subclass that declares ``kind`` (its
+``type`` in scenario files) and ``report_group`` is found by
+:func:`excitation_from_table`, reads and writes its own ``[excitation]`` table
+(:meth:`Excitation.from_table`, :meth:`Excitation.to_table`) and gives the plain-float
+ü_g(t) the analytic solvers use (:meth:`Excitation.scalar_acceleration`). Adding an
+excitation is writing one such class; nothing else dispatches on the classes.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from abc import ABC, abstractmethod
+from bisect import bisect_right
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
@@ -18,32 +28,127 @@ from typing import Any, ClassVar
 import numpy as np
 
 from rockbench.errors import ScenarioError
+from rockbench.scenarios import checks
 
 __all__ = ["Excitation", "Free", "SinePulse", "CosinePulse", "Sinusoid", "Record",
-           "STANDARD_GRAVITY"]
+           "STANDARD_GRAVITY", "MAX_BASE_ACCELERATION", "REPORT_GROUPS", "excitation_kinds",
+           "excitation_class", "excitation_from_table"]
 
 #: Conversion factor for records given in units of g.
 STANDARD_GRAVITY = 9.80665
 
+#: Largest base acceleration accepted (m/s², about 10⁵ g): far beyond any ground motion,
+#: and a bound under which the solvers' squared accelerations cannot overflow.
+MAX_BASE_ACCELERATION = 1e6
+
+#: How reports group scenarios by their base motion (an excitation's ``report_group``).
+REPORT_GROUPS = ("free", "pulse", "sine", "record")
+
 ArrayLike = float | np.ndarray
 
+#: kind → class, filled by :meth:`Excitation.__init_subclass__`.
+_REGISTRY: dict[str, type[Excitation]] = {}
 
-def _finite_positive(value: float, what: str, allow_zero: bool = False) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ScenarioError(f"{what} must be a number, got {value!r}") from None
-    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
-        bound = ">= 0" if allow_zero else "> 0"
-        raise ScenarioError(f"{what} must be finite and {bound}, got {value!r}")
-    return v
+
+def _finite_positive(value: Any, what: str, allow_zero: bool = False) -> float:
+    return checks.number(value, what, low=0.0, strict=not allow_zero)
+
+
+def _finite(value: Any, what: str) -> float:
+    return checks.number(value, what)
+
+
+def _plausible(peak: float, what: str) -> None:
+    """Refuse a base acceleration above :data:`MAX_BASE_ACCELERATION`, saying why."""
+    if not peak <= MAX_BASE_ACCELERATION:
+        raise ScenarioError(
+            f"{what} reaches {peak:.3g} m/s² ({peak / STANDARD_GRAVITY:.3g} g): base "
+            f"accelerations above {MAX_BASE_ACCELERATION:g} m/s² are refused (no ground motion "
+            f"comes near, and the solvers' arithmetic would overflow)")
 
 
 class Excitation(ABC):
-    """Horizontal base motion u_g(t) along +x, at rest at t = 0."""
+    """Horizontal base motion u_g(t) along +x, at rest at t = 0.
 
-    #: Name used in scenario files.
+    A concrete subclass declares the class variables ``kind`` and
+    ``report_group`` and implements the motion, :meth:`from_table` and
+    :meth:`to_table`; defining it registers it under its kind (a subclass
+    without its own ``kind``, such as a shared base, is not registered).
+    """
+
+    #: Name used in scenario files (``type = "..."`` of the ``[excitation]`` table).
     kind: ClassVar[str]
+    #: How reports group scenarios driven by it: one of :data:`REPORT_GROUPS`.
+    report_group: ClassVar[str]
+    #: Keys its ``[excitation]`` table may hold besides ``type``.
+    table_keys: ClassVar[frozenset[str]] = frozenset()
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "kind" not in cls.__dict__:
+            return
+        kind, group = cls.kind, getattr(cls, "report_group", None)
+        if not isinstance(kind, str) or not kind:
+            raise TypeError(f"{cls.__qualname__}.kind must be a non-empty string")
+        if group not in REPORT_GROUPS:
+            raise TypeError(f"{cls.__qualname__}.report_group must be one of "
+                            f"{', '.join(REPORT_GROUPS)}, got {group!r}")
+        old = _REGISTRY.get(kind)
+        # the same class defined again (a module reloaded) replaces itself
+        if old is not None and (old.__module__, old.__qualname__) != (cls.__module__,
+                                                                       cls.__qualname__):
+            raise TypeError(f"excitation kind {kind!r} is already registered by "
+                            f"{old.__module__}.{old.__qualname__}")
+        _REGISTRY[kind] = cls
+
+    @classmethod
+    @abstractmethod
+    def from_table(cls, table: Mapping[str, Any], *, source: Path | None = None) -> Excitation:
+        """The excitation of an ``[excitation]`` table of this kind.
+
+        Parameters
+        ----------
+        table : mapping
+            The parsed table; its ``type`` key (this class's kind) is ignored.
+        source : Path, optional
+            Scenario file the table was read from: relative file names in the
+            table are resolved against its folder (else the working directory).
+
+        Raises
+        ------
+        ScenarioError
+            Unknown or missing keys, wrong types or invalid values; the message
+            names the field.
+        """
+
+    @abstractmethod
+    def to_table(self) -> dict[str, Any]:
+        """The ``[excitation]`` table (``type`` plus fields) that :meth:`from_table` reads back."""
+
+    def to_dict(self) -> dict[str, Any]:
+        """Same as :meth:`to_table` (the older name, still used by ``rockbench scenarios``)."""
+        return self.to_table()
+
+    @classmethod
+    def _fields(cls, table: Mapping[str, Any], required: tuple[str, ...] = ()) -> dict[str, Any]:
+        """The table's fields without ``type``, refusing unknown and missing keys."""
+        data = checks.table(table, "[excitation]")
+        data.pop("type", None)
+        where = f"[excitation] of type {cls.kind!r}"
+        checks.no_unknown(data, cls.table_keys, where)
+        missing = [k for k in required if k not in data]
+        if missing:
+            raise ScenarioError(f"{where} needs {' and '.join(map(repr, missing))}")
+        return data
+
+    def scalar_acceleration(self) -> Callable[[float], float]:
+        """ü_g(t) for one float time, returning a float: what ODE right-hand sides call.
+
+        This default wraps :meth:`acceleration`; the built-in excitations return
+        plain-``math`` formulas instead, since a vectorised call on one float
+        costs tens of µs and dominates long forced integrations.
+        """
+        return lambda t: float(self.acceleration(t))
 
     @abstractmethod
     def acceleration(self, t: ArrayLike) -> ArrayLike:
@@ -96,9 +201,53 @@ class Excitation(ABC):
         return (float(np.max(np.abs(self.displacement(t)))),
                 float(np.max(np.abs(self.velocity(t)))))
 
-    @abstractmethod
-    def to_dict(self) -> dict[str, Any]:
-        """Scenario-file representation (``type`` plus fields)."""
+
+def excitation_kinds() -> tuple[str, ...]:
+    """Kinds of every registered excitation (their ``type`` in scenario files)."""
+    return tuple(_REGISTRY)
+
+
+def excitation_class(kind: Any) -> type[Excitation]:
+    """The excitation class registered under ``kind``.
+
+    Raises
+    ------
+    ScenarioError
+        ``kind`` is not a string or no class has it.
+    """
+    types = ", ".join(_REGISTRY)
+    if not isinstance(kind, str):
+        raise ScenarioError(f"[excitation] type must be a string, one of {types}; "
+                            f"got {checks.describe(kind)}")
+    if kind not in _REGISTRY:
+        raise ScenarioError(f"unknown excitation type {kind!r}; types: {types}")
+    return _REGISTRY[kind]
+
+
+def excitation_from_table(table: Any, *, source: Path | None = None) -> Excitation:
+    """The excitation of an ``[excitation]`` table, by its ``type`` (default ``"free"``).
+
+    Parameters
+    ----------
+    table : mapping
+        The parsed table.
+    source : Path, optional
+        Scenario file it was read from (see :meth:`Excitation.from_table`).
+
+    Raises
+    ------
+    ScenarioError
+        Not a table, unknown type, or invalid fields; messages start with
+        ``[excitation]``.
+    """
+    data = checks.table(table, "[excitation]")
+    cls = excitation_class(data.get("type", "free"))
+    try:
+        return cls.from_table(data, source=source)
+    except ScenarioError as exc:
+        msg = str(exc)
+        raise ScenarioError(msg if msg.startswith("[excitation]") else
+                            f"[excitation] {msg}") from None
 
 
 @dataclass(frozen=True)
@@ -106,6 +255,7 @@ class Free(Excitation):
     """No base motion (free rocking from an initial tilt)."""
 
     kind: ClassVar[str] = "free"
+    report_group: ClassVar[str] = "free"
 
     def acceleration(self, t: ArrayLike) -> ArrayLike:
         return np.zeros_like(np.asarray(t, float)) + 0.0
@@ -121,7 +271,15 @@ class Free(Excitation):
     def is_free(self) -> bool:
         return True
 
-    def to_dict(self) -> dict[str, Any]:
+    def scalar_acceleration(self) -> Callable[[float], float]:
+        return lambda t: 0.0
+
+    @classmethod
+    def from_table(cls, table: Mapping[str, Any], *, source: Path | None = None) -> Free:
+        cls._fields(table)
+        return cls()
+
+    def to_table(self) -> dict[str, Any]:
         return {"type": self.kind}
 
 
@@ -137,15 +295,35 @@ class _Pulse(Excitation):
     frequency: float
     amplitude: float
     cycles: int = 1
+    report_group: ClassVar[str] = "pulse"
+    table_keys: ClassVar[frozenset[str]] = frozenset(
+        {"frequency", "amplitude", "peak_acceleration", "cycles"})
 
     def __post_init__(self) -> None:
-        _finite_positive(self.frequency, f"{self.kind} frequency")
-        if not math.isfinite(float(self.amplitude)):
-            raise ScenarioError(f"{self.kind} amplitude must be finite, got {self.amplitude!r}")
-        if int(self.cycles) != self.cycles or self.cycles < 1:
-            raise ScenarioError(
-                f"{self.kind} cycles must be a positive integer, got {self.cycles!r}"
-            )
+        checks.number(self.frequency, f"{self.kind} frequency", low=0.0, unit="Hz")
+        checks.number(self.amplitude, f"{self.kind} amplitude", unit="m")
+        checks.integer(self.cycles, f"{self.kind} cycles")
+        _plausible(abs(self.acceleration_amplitude), f"{self.kind} peak acceleration A ω²")
+
+    @classmethod
+    def from_table(cls, table: Mapping[str, Any], *, source: Path | None = None) -> _Pulse:
+        """A pulse from ``frequency`` and one of ``amplitude`` (m) and ``peak_acceleration``."""
+        data = cls._fields(table, required=("frequency",))
+        if ("amplitude" in data) == ("peak_acceleration" in data):
+            raise ScenarioError(f"[excitation] of type {cls.kind!r} needs exactly one of "
+                                f"'amplitude' (displacement, m) and 'peak_acceleration' "
+                                f"(m/s², signed)")
+        if "peak_acceleration" in data:
+            f = checks.number(data.pop("frequency"), f"{cls.kind} frequency", low=0.0,
+                              unit="Hz")
+            a = checks.number(data.pop("peak_acceleration"), f"{cls.kind} peak_acceleration",
+                              unit="m/s²")
+            return cls.from_acceleration(a, 2.0 * math.pi * f, **data)
+        return cls(**data)
+
+    def to_table(self) -> dict[str, Any]:
+        return {"type": self.kind, "frequency": self.frequency, "amplitude": self.amplitude,
+                "cycles": self.cycles}
 
     @property
     def omega(self) -> float:
@@ -189,11 +367,8 @@ class _Pulse(Excitation):
             Number of full cycles.
         """
         w = _finite_positive(omega_p, "pulse circular frequency omega_p")
-        return cls(frequency=w / (2.0 * math.pi), amplitude=float(a_p) / (w * w), cycles=cycles)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"type": self.kind, "frequency": self.frequency, "amplitude": self.amplitude,
-                "cycles": self.cycles}
+        a = _finite(a_p, "pulse acceleration amplitude a_p")
+        return cls(frequency=w / (2.0 * math.pi), amplitude=a / (w * w), cycles=cycles)
 
 
 @dataclass(frozen=True)
@@ -220,6 +395,13 @@ class SinePulse(_Pulse):
         t = np.asarray(t, float)
         w = self.omega
         return np.where(self._inside(t), self.amplitude * w * w * np.sin(w * t), 0.0)
+
+    def scalar_acceleration(self) -> Callable[[float], float]:
+        amp, w, t_end = self.amplitude * self.omega**2, self.omega, self.end_time
+
+        def pulse(t: float) -> float:
+            return amp * math.sin(w * t) if 0.0 <= t <= t_end else 0.0
+        return pulse
 
     def velocity(self, t: ArrayLike) -> ArrayLike:
         tc = np.clip(np.asarray(t, float), 0.0, self.end_time)
@@ -267,6 +449,13 @@ class CosinePulse(_Pulse):
         w = self.omega
         return np.where(self._inside(t), self.amplitude * w * w * np.cos(w * t), 0.0)
 
+    def scalar_acceleration(self) -> Callable[[float], float]:
+        amp, w, t_end = self.amplitude * self.omega**2, self.omega, self.end_time
+
+        def cos_pulse(t: float) -> float:
+            return amp * math.cos(w * t) if 0.0 <= t <= t_end else 0.0
+        return cos_pulse
+
     def velocity(self, t: ArrayLike) -> ArrayLike:
         t = np.asarray(t, float)
         w = self.omega
@@ -308,19 +497,22 @@ class Sinusoid(Excitation):
     duration: float | None = None
     ramp_cycles: float = 1.0
     kind: ClassVar[str] = "sinusoid"
+    report_group: ClassVar[str] = "sine"
+    table_keys: ClassVar[frozenset[str]] = frozenset(
+        {"frequency", "amplitude", "duration", "ramp_cycles"})
 
     def __post_init__(self) -> None:
-        _finite_positive(self.frequency, "sinusoid frequency")
-        if not math.isfinite(float(self.amplitude)):
-            raise ScenarioError(f"sinusoid amplitude must be finite, got {self.amplitude!r}")
-        _finite_positive(self.ramp_cycles, "sinusoid ramp_cycles", allow_zero=True)
+        checks.number(self.frequency, "sinusoid frequency", low=0.0, unit="Hz")
+        checks.number(self.amplitude, "sinusoid amplitude", unit="m")
+        checks.number(self.ramp_cycles, "sinusoid ramp_cycles", low=0.0, strict=False)
         if self.duration is not None:
-            _finite_positive(self.duration, "sinusoid duration")
+            checks.number(self.duration, "sinusoid duration", low=0.0, unit="s")
             if 2 * self.ramp_time > self.duration + 1e-12:
                 raise ScenarioError(
                     f"sinusoid duration {self.duration} s is shorter than its two ramps "
                     f"({2 * self.ramp_time:g} s)"
                 )
+        _plausible(abs(self.amplitude) * self.omega**2, "sinusoid acceleration A ω²")
 
     @property
     def omega(self) -> float:
@@ -401,7 +593,34 @@ class Sinusoid(Excitation):
         k2 = (math.pi / self.ramp_time) ** 2 if self.ramp_time > 0 else 0.0
         return a, a * (om if k2 <= 2.0 * om * om else 0.5 * k2 / math.sqrt(k2 - om * om))
 
-    def to_dict(self) -> dict[str, Any]:
+    def scalar_acceleration(self) -> Callable[[float], float]:
+        amp, w, tr, t_end = self.amplitude, self.omega, self.ramp_time, self.end_time
+        has_end = self.duration is not None
+        k = math.pi / tr if tr > 0 else 0.0
+
+        def sinusoid(t: float) -> float:
+            if t < 0.0 or t > t_end:
+                return 0.0
+            win, dwin, ddwin = 1.0, 0.0, 0.0
+            if tr > 0:
+                if has_end and t > t_end - tr:  # ramp down (takes precedence, as in _window)
+                    x, sign = t_end - t, -1.0
+                elif t < tr:
+                    x, sign = t, 1.0
+                else:
+                    x = -1.0
+                if x >= 0.0:
+                    cx, sx = math.cos(k * x), math.sin(k * x)
+                    win, dwin, ddwin = 0.5 * (1.0 - cx), sign * 0.5 * k * sx, 0.5 * k * k * cx
+            s, c = math.sin(w * t), math.cos(w * t)
+            return amp * (-w * w * s * win + 2.0 * w * c * dwin + s * ddwin)
+        return sinusoid
+
+    @classmethod
+    def from_table(cls, table: Mapping[str, Any], *, source: Path | None = None) -> Sinusoid:
+        return cls(**cls._fields(table, required=("frequency", "amplitude")))
+
+    def to_table(self) -> dict[str, Any]:
         d: dict[str, Any] = {"type": self.kind, "frequency": self.frequency,
                              "amplitude": self.amplitude, "ramp_cycles": self.ramp_cycles}
         if self.duration is not None:
@@ -439,11 +658,14 @@ class Record(Excitation):
     source: str = ""
     units: str = "m/s2"
     kind: ClassVar[str] = "record"
+    report_group: ClassVar[str] = "record"
+    table_keys: ClassVar[frozenset[str]] = frozenset(
+        {"file", "units", "scale", "times", "accelerations"})
     _tab: tuple[np.ndarray, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        t = np.asarray(self.times, float).reshape(-1)
-        a = np.asarray(self.accelerations, float).reshape(-1)
+        t = checks.number_array(self.times, "record times")
+        a = checks.number_array(self.accelerations, "record accelerations")
         if t.size != a.size or t.size < 2:
             raise ScenarioError(
                 f"record needs matching time and acceleration arrays of at least 2 samples, "
@@ -453,22 +675,35 @@ class Record(Excitation):
             raise ScenarioError("record contains NaN or infinite values")
         if np.any(np.diff(t) <= 0) or t[0] < 0:
             raise ScenarioError("record times must be >= 0 and strictly increasing")
-        if not math.isfinite(float(self.scale)):
-            raise ScenarioError(f"record scale must be finite, got {self.scale!r}")
+        scale = checks.number(self.scale, "record scale")
+        checks.text(self.source, "record source")
+        if self.units not in _UNITS:
+            raise ScenarioError(f"record units must be 'g' or 'm/s2', got "
+                                f"{checks.describe(self.units)}")
         if t[0] > 0:
             t = np.concatenate([[0.0], t])
             a = np.concatenate([[0.0], a])
         object.__setattr__(self, "times", t)
         object.__setattr__(self, "accelerations", a)
-        a = a * float(self.scale)
-        dt = np.diff(t)
-        # exact velocity of the piecewise-linear acceleration, then the constant
-        # offset c that brings the velocity back to zero at the last sample
-        v_raw = np.concatenate([[0.0], np.cumsum(0.5 * (a[:-1] + a[1:]) * dt)])
-        c = v_raw[-1] / t[-1]
-        a = a - c
-        v = np.concatenate([[0.0], np.cumsum(0.5 * (a[:-1] + a[1:]) * dt)])
-        u = np.concatenate([[0.0], np.cumsum(v[:-1] * dt + dt * dt * (2 * a[:-1] + a[1:]) / 6)])
+        # finite samples can overflow once scaled and integrated (1e308, -1e308, ...) and
+        # would stall the solvers: refused before anything is computed from them
+        with np.errstate(over="ignore"):
+            _plausible(float(np.max(np.abs(a))) * abs(scale), "record acceleration (× scale)")
+        with np.errstate(over="ignore", invalid="ignore"):
+            a = a * scale
+            dt = np.diff(t)
+            # exact velocity of the piecewise-linear acceleration, then the constant
+            # offset c that brings the velocity back to zero at the last sample
+            v_raw = np.concatenate([[0.0], np.cumsum(0.5 * (a[:-1] + a[1:]) * dt)])
+            c = v_raw[-1] / t[-1]
+            a = a - c
+            v = np.concatenate([[0.0], np.cumsum(0.5 * (a[:-1] + a[1:]) * dt)])
+            u = np.concatenate([[0.0], np.cumsum(v[:-1] * dt
+                                                 + dt * dt * (2 * a[:-1] + a[1:]) / 6)])
+        if not all(np.all(np.isfinite(x)) for x in (v, u)):
+            raise ScenarioError(
+                "record velocity or displacement overflows: the record is too long for its "
+                "accelerations")
         object.__setattr__(self, "_tab", (t, a, v, u))
 
     @property
@@ -526,7 +761,52 @@ class Record(Excitation):
         ub = np.abs(u[:n]) + vb * dt
         return float(ub.max()), float(vb.max())
 
-    def to_dict(self) -> dict[str, Any]:
+    def scalar_acceleration(self) -> Callable[[float], float]:
+        times = np.asarray(self.times, dtype=float)
+        acc = np.asarray(self.acceleration(times), dtype=float)
+        tl, al = times.tolist(), acc.tolist()
+        slopes = (np.diff(acc) / np.diff(times)).tolist()
+        last, t_end = len(tl) - 2, float(times[-1])
+
+        def record(t: float) -> float:
+            if t < 0.0 or t > t_end:
+                return 0.0
+            i = min(max(bisect_right(tl, t) - 1, 0), last)
+            return al[i] + slopes[i] * (t - tl[i])
+        return record
+
+    @classmethod
+    def from_table(cls, table: Mapping[str, Any], *, source: Path | None = None) -> Record:
+        """A record from ``file`` (CSV or PEER AT2), or inline ``times`` and ``accelerations``.
+
+        ``units`` (``"g"`` or ``"m/s2"``) applies to a file; inline accelerations
+        are in m/s². ``scale`` multiplies the accelerations.
+        """
+        data = cls._fields(table)
+        scale = data.get("scale", 1.0)
+        checks.number(scale, "record scale")
+        if "file" in data:
+            if "times" in data or "accelerations" in data:
+                raise ScenarioError("[excitation] of type 'record' takes either 'file' or "
+                                    "'times'/'accelerations'")
+            src = checks.text(data["file"], "record file")
+            units = data.get("units")
+            if units is not None and units not in _UNITS:
+                raise ScenarioError(f"record units must be 'g' or 'm/s2', got "
+                                    f"{checks.describe(units)}")
+            path = Path(src)
+            if not path.is_absolute() and source is not None:
+                path = source.parent / path
+            return cls.from_file(path, units=units, scale=scale, source=src)
+        if "times" not in data or "accelerations" not in data:
+            raise ScenarioError("[excitation] of type 'record' needs 'file' or both 'times' "
+                                "and 'accelerations'")
+        if data.get("units", "m/s2") != "m/s2":
+            raise ScenarioError(f"record units apply to a 'file' only: inline accelerations are "
+                                f"in m/s², got units = {checks.describe(data['units'])}")
+        return cls(data["times"], data["accelerations"], scale=scale)
+
+    def to_table(self) -> dict[str, Any]:
         if self.source:
             return {"type": self.kind, "file": self.source, "units": self.units,
                     "scale": self.scale}
@@ -555,17 +835,38 @@ class Record(Excitation):
         path = Path(path)
         is_at2 = path.suffix.lower() == ".at2"
         units = units or ("g" if is_at2 else "m/s2")
-        if units not in ("g", "m/s2"):
-            raise ScenarioError(f"record units must be 'g' or 'm/s2', got {units!r}")
+        if units not in _UNITS:
+            raise ScenarioError(f"record units must be 'g' or 'm/s2', got "
+                                f"{checks.describe(units)}")
+        checks.number(scale, "record scale")
         try:
-            text = path.read_text()
+            raw = path.read_bytes()
         except OSError as exc:
-            raise ScenarioError(f"cannot read record file {str(path)!r}: {exc.strerror}") from None
+            raise ScenarioError(f"cannot read record file {str(path)!r}: "
+                                f"{exc.strerror or exc}") from None
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise ScenarioError(f"{path}: not a text record file (byte 0x{raw[exc.start]:02x} "
+                                f"at offset {exc.start} is not UTF-8)") from None
         t, a = _parse_at2(text, path) if is_at2 else _parse_csv(text, path)
         if units == "g":
             a = a * STANDARD_GRAVITY
-        return cls(t, a, scale=scale, source=str(source if source is not None else path),
-                   units=units)
+        try:
+            return cls(t, a, scale=scale, source=str(source if source is not None else path),
+                       units=units)
+        except ScenarioError as exc:
+            raise ScenarioError(f"{path}: {exc}") from None
+
+
+#: Units a record file may give its accelerations in.
+_UNITS = ("g", "m/s2")
+
+
+def _short(line: str, limit: int = 60) -> str:
+    """repr of a file line, cut to ``limit`` characters for a one-line message."""
+    r = repr(line)
+    return r if len(r) <= limit else r[:limit - 4] + "..." + r[0]
 
 
 def _parse_csv(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -580,7 +881,7 @@ def _parse_csv(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
         except ValueError:
             if not rows:  # a header line
                 continue
-            raise ScenarioError(f"{path}: line {ln} is not two numbers: {s!r}") from None
+            raise ScenarioError(f"{path}: line {ln} is not two numbers: {_short(s)}") from None
         if len(vals) != 2:
             raise ScenarioError(f"{path}: line {ln} must have 2 columns (t, acc), has {len(vals)}")
         rows.append(vals)
@@ -591,8 +892,6 @@ def _parse_csv(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _parse_at2(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
-    import re
-
     lines = text.splitlines()
     if len(lines) < 5:
         raise ScenarioError(f"{path}: too short for a PEER AT2 file (4 header lines + data)")
@@ -600,14 +899,19 @@ def _parse_at2(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
     m_n = re.search(r"NPTS\s*=?\s*(\d+)", header)
     m_dt = re.search(r"DT\s*=?\s*([0-9.Ee+-]+)", header)
     if not (m_n and m_dt):
-        raise ScenarioError(f"{path}: line 4 must give NPTS and DT, got {lines[3].strip()!r}")
-    n, dt = int(m_n.group(1)), float(m_dt.group(1))
+        raise ScenarioError(f"{path}: line 4 must give NPTS and DT, got {_short(lines[3].strip())}")
+    n = int(m_n.group(1))
+    try:
+        dt = float(m_dt.group(1))
+    except ValueError:
+        dt = math.nan
+    if not (math.isfinite(dt) and dt > 0):
+        raise ScenarioError(f"{path}: line 4 must give DT as a finite number of seconds > 0, "
+                            f"got DT={m_dt.group(1)}")
     try:
         vals = np.array([float(x) for ln in lines[4:] for x in ln.split()])
     except ValueError as exc:
-        raise ScenarioError(f"{path}: non-numeric data ({exc})") from None
+        raise ScenarioError(f"{path}: non-numeric data ({_short(str(exc), 80)})") from None
     if vals.size < n:
         raise ScenarioError(f"{path}: header says NPTS={n} but {vals.size} values found")
-    if dt <= 0:
-        raise ScenarioError(f"{path}: DT must be > 0, got {dt}")
     return dt * np.arange(n), vals[:n]

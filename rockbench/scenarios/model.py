@@ -15,25 +15,16 @@ from typing import Any
 import numpy as np
 
 from rockbench.errors import ScenarioError
+from rockbench.scenarios import checks
 from rockbench.scenarios.excitation import Excitation, Free
 
 __all__ = ["Block", "Stack", "Contact", "Scenario", "RockingProperties"]
 
 
-def _check(value: Any, what: str, *, low: float = 0.0, strict: bool = True,
-           high: float | None = None) -> float:
-    """Validate a finite number in a range and return it as float."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ScenarioError(f"{what} must be a number, got {value!r}") from None
-    ok = math.isfinite(v) and (v > low if strict else v >= low) and (high is None or v <= high)
-    if not ok:
-        rng = f"{'>' if strict else '>='} {low:g}"
-        if high is not None:
-            rng += f" and <= {high:g}"
-        raise ScenarioError(f"{what} must be finite and {rng}, got {value!r}")
-    return v
+def _check(value: Any, what: str, *, low: float | None = 0.0, strict: bool = True,
+           high: float | None = None, unit: str = "") -> float:
+    """Validate a finite number (never a string or boolean) in a range; return it as float."""
+    return checks.number(value, what, low=low, strict=strict, high=high, unit=unit)
 
 
 @dataclass(frozen=True)
@@ -106,14 +97,16 @@ class Block:
 
     def __post_init__(self) -> None:
         for name in ("width", "depth", "height"):
-            object.__setattr__(self, name, _check(getattr(self, name), f"block {name}"))
+            object.__setattr__(self, name, _check(getattr(self, name), f"block {name}",
+                                                  unit="m"))
         if (self.density is None) == (self.mass is None):
             raise ScenarioError("block needs exactly one of 'density' and 'mass'")
         if self.density is not None:
-            object.__setattr__(self, "density", _check(self.density, "block density"))
+            object.__setattr__(self, "density", _check(self.density, "block density",
+                                                       unit="kg/m³"))
         else:
-            object.__setattr__(self, "mass", _check(self.mass, "block mass"))
-        c = _check(self.chamfer, "block chamfer", strict=False)
+            object.__setattr__(self, "mass", _check(self.mass, "block mass", unit="kg"))
+        c = _check(self.chamfer, "block chamfer", strict=False, unit="m")
         if c >= 0.5 * min(self.width, self.height):
             raise ScenarioError(
                 f"block chamfer {c} must be smaller than half the width and half the height"
@@ -186,7 +179,10 @@ class Stack:
         Bottom first.
     offsets : sequence of float, optional
         Horizontal offset (m) of each block's centre from the bottom block's
-        centre along x. Only zeros are supported by the analytic models.
+        centre along x. Only zeros are supported by the analytic models. The
+        blocks above each contact must have their common centre of mass
+        strictly inside it (between the pivots both faces share), else the
+        stack could not stand at rest.
     """
 
     blocks: tuple[Block, ...]
@@ -198,11 +194,32 @@ class Stack:
             raise ScenarioError("a stack needs at least one block")
         if not all(isinstance(b, Block) for b in blocks):
             raise ScenarioError("stack blocks must be Block instances")
-        offsets = tuple(float(o) for o in self.offsets) or (0.0,) * len(blocks)
-        if len(offsets) != len(blocks) or not all(math.isfinite(o) for o in offsets):
-            raise ScenarioError("stack offsets must be finite, one per block")
+        offsets = tuple(_check(o, "stack offset", low=None, unit="m") for o in self.offsets) \
+            or (0.0,) * len(blocks)
+        if len(offsets) != len(blocks):
+            raise ScenarioError(f"stack offsets must be one per block: {len(offsets)} offsets "
+                                f"for {len(blocks)} blocks")
         object.__setattr__(self, "blocks", blocks)
         object.__setattr__(self, "offsets", offsets)
+        self._check_support()
+
+    def _check_support(self) -> None:
+        """Refuse a stack whose upper blocks' centre of mass lies off a contact."""
+        ms = [b.m for b in self.blocks]
+        for i in range(1, len(self.blocks)):
+            lo, up = self.blocks[i - 1], self.blocks[i]
+            left = max(self.offsets[i - 1] - lo.pivot_half_width,
+                       self.offsets[i] - up.pivot_half_width)
+            right = min(self.offsets[i - 1] + lo.pivot_half_width,
+                        self.offsets[i] + up.pivot_half_width)
+            m_above = sum(ms[i:])
+            x_above = sum(m * x for m, x in zip(ms[i:], self.offsets[i:], strict=True)) / m_above
+            if not left < x_above < right:
+                raise ScenarioError(
+                    f"block #{i + 1} is off its support: the centre of mass of the blocks from "
+                    f"#{i + 1} up is at x = {x_above:g} m, outside the contact with block #{i} "
+                    f"(x from {left:g} to {right:g} m; offsets are from the bottom block's "
+                    f"centre)")
 
     def __len__(self) -> int:
         return len(self.blocks)
@@ -347,13 +364,24 @@ class Scenario:
         if not isinstance(self.excitation, Excitation):
             raise ScenarioError("scenario excitation must be an Excitation")
         tilt = self.initial_tilt
-        if not (isinstance(tilt, (int, float)) and math.isfinite(tilt) and abs(tilt) < 1.0):
+        if not (checks.is_number(tilt) and math.isfinite(tilt) and abs(tilt) < 1.0):
             raise ScenarioError(
-                f"initial tilt must be a fraction of λ with |tilt| < 1, got {tilt!r}"
+                f"initial tilt must be a fraction of λ with |tilt| < 1, got "
+                f"{checks.describe(tilt)}"
             )
-        object.__setattr__(self, "duration", _check(self.duration, "scenario duration"))
-        object.__setattr__(self, "output_rate", _check(self.output_rate, "output_rate"))
-        object.__setattr__(self, "g", _check(self.g, "gravity"))
+        if not isinstance(self.description, str):
+            raise ScenarioError(f"scenario description must be a string, got "
+                                f"{checks.describe(self.description)}")
+        object.__setattr__(self, "duration", _check(self.duration, "scenario duration",
+                                                    unit="s"))
+        object.__setattr__(self, "output_rate", _check(self.output_rate, "output_rate",
+                                                       unit="samples/s"))
+        object.__setattr__(self, "g", _check(self.g, "gravity", unit="m/s²"))
+        if self.duration * self.output_rate < 1.0 - 1e-9:
+            raise ScenarioError(
+                f"output_rate {self.output_rate:g} samples/s gives a single sample over the "
+                f"{self.duration:g} s run: a trajectory needs at least 2 (output_rate >= "
+                f"1/duration = {1.0 / self.duration:.3g})")
 
     @property
     def blocks(self) -> tuple[Block, ...]:
