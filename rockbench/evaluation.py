@@ -38,10 +38,11 @@ from typing import Any
 import numpy as np
 
 from rockbench import metrics
+from rockbench.method import Method
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["RunMetrics", "evaluate_run", "rocking_impacts", "sliding", "finite_or_none",
+__all__ = ["RunMetrics", "RunResult", "evaluate_run", "rocking_impacts", "sliding", "finite_or_none",
            "IMPACT_THRESHOLD", "PEAK_FLOOR", "N_IMPACTS", "NUMERIC_METRICS"]
 
 #: A zero crossing of θ is an impact only after |θ| reached this fraction of λ.
@@ -292,3 +293,35 @@ def evaluate_run(scenario: Scenario, traj: Trajectory, reference: Trajectory | N
         impact_time_error=max(imp_defined) if imp_defined else None,
         impacts_missing=missing, error_note=note,
     )
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """A run of a study: what was simulated, by which method, and its metrics.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        What was simulated.
+    method : Method
+        Engine and settings.
+    metrics : RunMetrics
+        From :func:`evaluate_run`.
+    trajectory : str
+        The file holding its time history, if the study keeps one.
+    """
+
+    scenario: Scenario
+    method: Method
+    metrics: RunMetrics
+    trajectory: str = ""
+
+    @property
+    def status(self) -> Status:
+        """How the run ended."""
+        return self.metrics.status
+
+    @property
+    def key(self) -> tuple[str, str]:
+        """(scenario name, method label)."""
+        return (self.scenario.name, self.method.label)

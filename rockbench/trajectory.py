@@ -12,6 +12,7 @@ with the metadata; ``save("run.csv")`` writes one column per quantity
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import dataclass, field
 from enum import Enum
 from pathlib import Path
@@ -173,20 +174,32 @@ class Trajectory:
             The sidecar path.
         """
         path = Path(path)
+        if path.suffix not in (".npz", ".csv"):
+            raise ValueError(f"unsupported trajectory format {path.suffix!r}: use .npz or .csv")
         path.parent.mkdir(parents=True, exist_ok=True)
         cols = self.columns()
-        if path.suffix == ".npz":
-            np.savez_compressed(path, **cols)
-        elif path.suffix == ".csv":
-            data = np.column_stack(list(cols.values())) if self.t.size else np.zeros((0, len(cols)))
-            np.savetxt(path, data, delimiter=",", header=",".join(cols), comments="", fmt="%.10g")
-        else:
-            raise ValueError(f"unsupported trajectory format {path.suffix!r}: use .npz or .csv")
         meta = self.metadata()
         if scenario is not None:
             meta["scenario_definition"] = scenario
         side = path.with_suffix(".json")
-        side.write_text(json.dumps(meta, indent=2, default=_json_default))
+        # write then rename, sidecar last: an interrupted save leaves the old files
+        # or a data file without its sidecar, never a torn file under the final name
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        try:
+            with tmp.open("wb") as fh:
+                if path.suffix == ".npz":
+                    np.savez_compressed(fh, **cols)
+                else:
+                    data = (np.column_stack(list(cols.values())) if self.t.size
+                            else np.zeros((0, len(cols))))
+                    np.savetxt(fh, data, delimiter=",", header=",".join(cols), comments="",
+                               fmt="%.10g")
+            os.replace(tmp, path)
+            tmp_side = side.with_name(f".{side.name}.{os.getpid()}.tmp")
+            tmp_side.write_text(json.dumps(meta, indent=2, default=_json_default))
+            os.replace(tmp_side, side)
+        finally:
+            tmp.unlink(missing_ok=True)
         return side
 
     @classmethod

@@ -87,7 +87,7 @@ def report(tmp_path_factory: pytest.TempPathFactory) -> dict:
     engine = _engine()
     out = tmp / "out"
     argv = ["compare", "--scenarios", ",".join(files), "--engine", engine,
-            "--presets", "fast", "--out", str(out), "--quiet"]
+            "--presets", "fast", "--out", str(out), "--db", str(tmp / "runs.db"), "--quiet"]
     assert main(argv) == 0
     return {"out": out, "engine": engine, "argv": argv, "files": files, "tmp": tmp}
 
@@ -275,6 +275,54 @@ def test_resume_skips_finished_runs(report: dict, capsys: pytest.CaptureFixture)
     assert "--presets" in capsys.readouterr().err
 
 
+def test_history_lists_compare_runs(report: dict, capsys: pytest.CaptureFixture) -> None:
+    db = str(report["tmp"] / "runs.db")
+    capsys.readouterr()
+    assert main(["history", "--db", db]) == 0
+    out = capsys.readouterr().out
+    for s in SCENARIOS:
+        assert s in out
+    assert main(["history", "tiny-pulse", "--db", db, "--kind", "compare"]) == 0
+    out = capsys.readouterr().out
+    assert report["engine"] in out and "compare" in out
+
+
+def test_resume_reruns_a_torn_trajectory(report: dict, capsys: pytest.CaptureFixture) -> None:
+    out, eng = report["out"], report["engine"]
+    torn = out / "trajectories" / "tiny-pulse" / f"{_file(eng)}.npz"
+    torn.write_bytes(torn.read_bytes()[:100])  # an interrupted write
+    empty = out / "trajectories" / "tiny-free" / f"{_file(eng)}.npz"
+    empty.write_bytes(b"")
+    capsys.readouterr()
+    assert main([a for a in report["argv"] if a != "--quiet"] + ["--resume"]) == 0
+    assert "2 run, 4 reused" in capsys.readouterr().out
+    peak = float(_row(_csv(out), "tiny-pulse", eng)["peak_ratio_1"])
+    with np.load(torn) as f:  # rewritten whole
+        assert float(np.max(np.abs(f["theta_1"]))) / _lam(report, "tiny-pulse") == \
+            pytest.approx(peak, rel=1e-12)
+
+
+def test_colliding_scenario_names_are_refused(tmp_path: Path,
+                                              capsys: pytest.CaptureFixture) -> None:
+    files = []
+    for i, name in enumerate(("a b", "a-b")):
+        path = tmp_path / f"s{i}.toml"
+        path.write_text(FREE.replace('name = "tiny-free"', f'name = "{name}"'))
+        files.append(str(path))
+    argv = ["compare", "--scenarios", ",".join(files), "--engine", "analytic",
+            "--out", str(tmp_path / "o"), "--no-db"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "'a b'" in err[0] and "'a-b'" in err[0]
+
+
+def test_resume_needs_the_store(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    argv = ["compare", "--scenarios", "free-b2-0.5", "--engine", "analytic", "--out",
+            str(tmp_path / "o"), "--no-db", "--resume"]
+    assert main(argv) == 2
+    assert "--no-db" in capsys.readouterr().err
+
+
 def test_bad_suite_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     assert main(["compare", "--suite", "nope", "--out", str(tmp_path / "d")]) == 2
     err = capsys.readouterr().err
@@ -302,7 +350,7 @@ def test_pareto_front() -> None:
 
 def test_sensitivity_maps_knobs() -> None:
     from rockbench.engines import engine_class
-    from rockbench.report.sensitivity import KNOBS, map_knob
+    from rockbench.studies.sensitivity import KNOBS, map_knob
 
     eng = _engine()
     cls = engine_class(eng)

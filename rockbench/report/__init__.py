@@ -1,18 +1,4 @@
-"""Report: comparison metrics, tables, charts, the HTML/Markdown report, the regression matrix,
-sweeps and overturning spectra.
-
-The command-line entry points live in ``command.py`` (compare), ``matrix_command.py``
-(matrix, history), ``sweep_command.py`` (sweep, tune) and ``spectrum_command.py``.
+"""Report: rendering of study results (tables, figures, HTML/Markdown documents, CSV,
+JUnit XML, terminal grids). Nothing here runs an engine or computes a metric:
+studies (:mod:`rockbench.studies`) hand it typed results.
 """
-
-from rockbench.metrics import (
-    impact_time_errors,
-    impact_times,
-    max_error,
-    peak_ratio,
-    peak_relative_error,
-    time_to_rest,
-)
-
-__all__ = ["impact_time_errors", "impact_times", "max_error", "peak_ratio",
-           "peak_relative_error", "time_to_rest"]

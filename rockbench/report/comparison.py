@@ -9,13 +9,15 @@ and cost (wall time, real-time factor, the paper's reported times).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
+from rockbench.evaluation import N_IMPACTS, RunResult
+from rockbench.method import REFERENCE, Method
+from rockbench.report.groups import group_title
 from rockbench.report.paper import paper_runtimes, paper_summary, paper_tables
-from rockbench.report.results import N_IMPACTS, REFERENCE, group_title
 from rockbench.report.tables import (
     Cell,
     Table,
@@ -26,12 +28,17 @@ from rockbench.report.tables import (
     fmt_seconds,
 )
 from rockbench.scenarios import Scenario
+from rockbench.trajectory import Status
 
 __all__ = ["Context", "overview_table", "peak_tables", "error_table", "free_tables",
            "timing_table", "paper_experiment_table", "paper_findings", "input_label",
            "fmt_impact"]
 
-Row = Mapping[str, Any]
+Row = RunResult
+
+
+def _at(values: tuple[Any, ...], i: int) -> Any:
+    return values[i] if i < len(values) else None
 
 
 def fmt_impact(v: Any) -> str:
@@ -46,17 +53,17 @@ class Context:
     ----------
     scenarios : sequence of Scenario
         In report order.
-    methods : sequence of str
-        Method labels in column order (the analytic reference first).
-    rows : sequence of mapping
-        Result rows of the main comparison (see :func:`~rockbench.report.results.compute_row`).
+    methods : sequence of Method
+        In column order (the analytic reference first).
+    rows : sequence of RunResult
+        Results of the main comparison (variations are left out).
     """
 
-    def __init__(self, scenarios: Sequence[Scenario], methods: Sequence[str],
+    def __init__(self, scenarios: Sequence[Scenario], methods: Sequence[Method],
                  rows: Sequence[Row]) -> None:
         self.scenarios = list(scenarios)
-        self.methods = list(methods)
-        self.rows = {(r["scenario"], r["method"]): r for r in rows if not r.get("variation")}
+        self.methods = [m.label for m in methods]
+        self.rows = {r.key: r for r in rows if not r.method.variation}
         self.counter = 0
 
     @property
@@ -85,17 +92,17 @@ def input_label(s: Scenario) -> tuple[str, str]:
 def _value(table: Table, row: Row | None, text: str, who: str) -> Cell:
     if row is None:
         return Cell("not run", kind="crashed")
-    if row["status"] != "ok":
-        return table.status_cell(row["status"], row["message"], who)
+    if row.status is not Status.OK:
+        return table.status_cell(row.status.value, row.metrics.message, who)
     return Cell(text, kind="ref" if who == REFERENCE else "")
 
 
 def _error_cell(table: Table, row: Row | None, text: str, who: str) -> Cell:
     if row is None:
         return Cell("not run", kind="crashed")
-    if row["status"] != "ok":
-        return table.status_cell(row["status"], row["message"], who)
-    note = row.get("error_note") or ""
+    if row.status is not Status.OK:
+        return table.status_cell(row.status.value, row.metrics.message, who)
+    note = row.metrics.error_note
     if text == "–":
         return Cell("–", note=table.note(note or "undefined"), title=note)
     if note:
@@ -115,10 +122,10 @@ def overview_table(ctx: Context, number: int) -> Table:
                  "median max |Δθ|/λ", "total wall (s)", "median real-time factor"])
     for m in ctx.methods:
         rows = [r for s in ctx.scenarios if (r := ctx.row(s.name, m)) is not None]
-        st = [r["status"] for r in rows]
-        errs = [r["max_error"] for r in rows if r["status"] == "ok"
-                and math.isfinite(r["max_error"])]
-        rtf = [r["realtime_factor"] for r in rows if math.isfinite(r["realtime_factor"])]
+        st = [r.status.value for r in rows]
+        errs = [r.metrics.max_error for r in rows if r.status is Status.OK
+                and r.metrics.max_error is not None]
+        rtf = [r.metrics.realtime_factor for r in rows if r.metrics.realtime_factor is not None]
         t.add_row([
             Cell(m, kind="head"), str(len(rows)), str(st.count("ok")),
             str(st.count("overturned")),
@@ -126,7 +133,7 @@ def overview_table(ctx: Context, number: int) -> Table:
             str(st.count("unsupported")),
             "reference" if m == REFERENCE else fmt_error(float(np.median(errs)) if errs
                                                          else math.nan),
-            fmt_seconds(sum(r["wall_time"] for r in rows)),
+            fmt_seconds(sum(r.metrics.wall_time for r in rows)),
             fmt_factor(float(np.median(rtf)) if rtf else math.nan),
         ])
     return t
@@ -174,7 +181,7 @@ def peak_tables(ctx: Context, group: str, scenarios: Sequence[Scenario]) -> list
             cells: list[Cell | str] = _case_columns(s)
             for m in ctx.methods:
                 r = ctx.row(s.name, m)
-                text = fmt_ratio(r.get(f"peak_ratio_{block}", math.nan)) if r else "–"
+                text = fmt_ratio(r.metrics.peaks[block - 1]) if r else "–"
                 cells.append(_value(t, r, text, m))
             if pt is not None:
                 vals = pt.values(s)
@@ -218,9 +225,9 @@ def error_table(ctx: Context, group: str, scenarios: Sequence[Scenario]) -> Tabl
                 if i > s.n_blocks:
                     cells.append(Cell(""))
                     continue
-                v = r.get(f"peak_error_{i}", math.nan) if r else math.nan
+                v = _at(r.metrics.peak_errors, i - 1) if r else None
                 cells.append(_error_cell(t, r, fmt_percent(v), m))
-            cells.append(_error_cell(t, r, fmt_error(r["max_error"]) if r else "–", m))
+            cells.append(_error_cell(t, r, fmt_error(r.metrics.max_error) if r else "–", m))
         t.add_row(cells)
     return t
 
@@ -244,12 +251,12 @@ def free_tables(ctx: Context, scenarios: Sequence[Scenario]) -> list[Table]:
         ref = ctx.row(s.name, REFERENCE)
         cells: list[Cell | str] = [Cell(s.name, kind="head"), f"{s.critical_angle:.4f}",
                                    f"{s.initial_tilt:g}"]
-        cells.append(_value(a, ref, fmt_seconds(ref["time_to_rest"]) if ref else "–",
+        cells.append(_value(a, ref, fmt_seconds(ref.metrics.time_to_rest) if ref else "–",
                             REFERENCE))
         for m in ctx.engines:
             r = ctx.row(s.name, m)
-            cells.append(_error_cell(a, r, fmt_error(r["max_error"]) if r else "–", m))
-            cells.append(_value(a, r, fmt_seconds(r["time_to_rest"]) if r else "–", m))
+            cells.append(_error_cell(a, r, fmt_error(r.metrics.max_error) if r else "–", m))
+            cells.append(_value(a, r, fmt_seconds(r.metrics.time_to_rest) if r else "–", m))
         a.add_row(cells)
     n2 = ctx.next_number()
     cols = ["scenario"]
@@ -269,7 +276,7 @@ def free_tables(ctx: Context, scenarios: Sequence[Scenario]) -> list[Table]:
         for m in ctx.engines:
             r = ctx.row(s.name, m)
             for k in range(1, N_IMPACTS + 1):
-                v = r.get(f"impact_error_{k}", math.nan) if r else math.nan
+                v = _at(r.metrics.impact_time_errors, k - 1) if r else None
                 cells.append(_error_cell(b, r, fmt_impact(v), m))
         b.add_row(cells)
     return [a, b]
@@ -308,11 +315,12 @@ def timing_table(ctx: Context) -> Table:
             if r is None:
                 cells += [Cell("not run", kind="crashed"), Cell("")]
                 continue
-            if r["status"] in ("ok", "overturned"):
-                cells += [Cell(fmt_seconds(r["wall_time"]), kind="" if r["status"] == "ok"
-                               else "overturned"), Cell(fmt_factor(r["realtime_factor"]))]
+            if r.metrics.completed:
+                cells += [Cell(fmt_seconds(r.metrics.wall_time),
+                               kind="" if r.status is Status.OK else "overturned"),
+                          Cell(fmt_factor(r.metrics.realtime_factor))]
             else:
-                cells += [t.status_cell(r["status"], r["message"], m), Cell("")]
+                cells += [t.status_cell(r.status.value, r.metrics.message, m), Cell("")]
         eng, dem = _paper_times(s)
         cells += [Cell(eng, kind="paper"), Cell(dem, kind="paper")]
         t.add_row(cells)

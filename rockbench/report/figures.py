@@ -24,9 +24,10 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from rockbench.report.results import REFERENCE
+from rockbench.evaluation import RunResult
+from rockbench.method import REFERENCE, Method
 from rockbench.scenarios import Scenario
-from rockbench.trajectory import Trajectory
+from rockbench.trajectory import Status, Trajectory
 
 __all__ = ["MethodStyle", "method_styles", "time_history_figure", "peak_input_figure",
            "accuracy_speed_figure", "sensitivity_figure", "pareto_front", "SpeedPoint",
@@ -49,15 +50,17 @@ class MethodStyle:
     zorder: int
 
 
-def method_styles(methods: Sequence[str]) -> dict[str, MethodStyle]:
-    """A colour per engine, a dash and a marker per preset; the analytic reference in black."""
+def method_styles(methods: Sequence[Method]) -> dict[str, MethodStyle]:
+    """A colour per engine, a dash and a marker per preset; the analytic reference in black.
+
+    Keyed by method label.
+    """
     engines: list[str] = []
     presets: dict[str, list[str]] = {}
     for m in methods:
-        eng = m.split("[", 1)[0]
-        if eng not in engines:
-            engines.append(eng)
-        presets.setdefault(eng, []).append(m)
+        if m.engine not in engines:
+            engines.append(m.engine)
+        presets.setdefault(m.engine, []).append(m.label)
     out = {}
     markers = "o^sDv"
     ci = 0
@@ -200,7 +203,7 @@ def time_history_figure(path: Path, scenario: Scenario, trajs: Mapping[str, Traj
 
 
 def peak_input_figure(path: Path, title: str, scenarios: Sequence[Scenario],
-                      methods: Sequence[str], rows: Mapping[tuple[str, str], Mapping[str, Any]],
+                      methods: Sequence[str], rows: Mapping[tuple[str, str], RunResult],
                       styles: Mapping[str, MethodStyle],
                       published: Sequence[tuple[int, str, Sequence[float | str], Scenario]] = (),
                       ) -> Path:
@@ -215,9 +218,9 @@ def peak_input_figure(path: Path, title: str, scenarios: Sequence[Scenario],
     scenarios : sequence of Scenario
         The cases (each one point per method).
     methods : sequence of str
-        Methods to draw.
+        Labels of the methods to draw.
     rows : mapping
-        (scenario, method) → result row.
+        (scenario, method label) → result.
     styles : mapping
         Method → :class:`MethodStyle`.
     published : sequence
@@ -238,9 +241,9 @@ def peak_input_figure(path: Path, title: str, scenarios: Sequence[Scenario],
     span = max(max(xs_all) - min(xs_all), 0.4)
     for col, block in enumerate(range(nb, 0, -1)):
         ax = axes[col]
-        finite = [r[f"peak_ratio_{block}"] for (sn, _), r in rows.items()
-                  if sn in names and r["status"] == "ok"
-                  and math.isfinite(r.get(f"peak_ratio_{block}", math.nan))]
+        finite = [p for (sn, _), r in rows.items()
+                  if sn in names and r.status is Status.OK and block <= r.metrics.n_blocks
+                  and (p := r.metrics.peaks[block - 1]) is not None]
         finite += [float(v) for b, _, v, _ in published if b == block and isinstance(v, float)]
         top = max([*finite, 0.1]) * 1.15
         failed_any = False
@@ -251,9 +254,9 @@ def peak_input_figure(path: Path, title: str, scenarios: Sequence[Scenario],
                 r = rows.get((s.name, m))
                 if r is None or block > s.n_blocks:
                     continue
-                if r["status"] == "ok":
+                if r.status is Status.OK:
                     xs.append(s.uplift_ratio)
-                    ys.append(r[f"peak_ratio_{block}"])
+                    ys.append(r.metrics.peaks[block - 1])
                 else:
                     fx.append(s.uplift_ratio)
             # small horizontal offsets keep coincident markers visible

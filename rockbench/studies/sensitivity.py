@@ -14,22 +14,15 @@ from __future__ import annotations
 
 import dataclasses
 import typing
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from rockbench.engines import Engine, engine_class
-from rockbench.report.figures import sensitivity_figure
-from rockbench.report.results import REFERENCE, Run
-from rockbench.report.tables import Cell, Table, fmt_error, fmt_factor, fmt_seconds
-from rockbench.runner import Job
-from rockbench.scenarios import Scenario
-from rockbench.trajectory import Trajectory
+from rockbench.method import REFERENCE, Method
 
 __all__ = ["Knob", "KNOBS", "Variation", "Skipped", "map_knob", "plan_sensitivity",
-           "sensitivity_table", "sensitivity_figures", "SUITE", "SCENARIO",
-           "SUBSTEP_FPS", "RATE_SUBSTEPS"]
+           "SUITE", "SCENARIO", "SUBSTEP_FPS", "RATE_SUBSTEPS"]
 
 #: The pseudo-suite name that runs only the sensitivity study.
 SUITE = "paper-sensitivity"
@@ -208,30 +201,26 @@ def map_knob(name: str, cls: type[Engine], knob: Knob) -> _Plan:
     return plan
 
 
-def plan_sensitivity(engines: Sequence[str], scenario: Scenario, *,
+def plan_sensitivity(engines: Sequence[str], *,
                      base: Mapping[str, Mapping[str, Any]] | None = None,
-                     make_run: Callable[[Job, str, str, str, Mapping[str, Any]], Run],
-                     ) -> tuple[list[Run], list[Variation], list[Skipped]]:
-    """Runs of the sensitivity study for the given engines.
+                     ) -> tuple[list[tuple[Method, dict[str, Any]]], list[Variation],
+                                list[Skipped]]:
+    """Methods of the sensitivity study for the given engines.
 
     Parameters
     ----------
     engines : sequence of str
         Engine names (the analytic reference is left out).
-    scenario : Scenario
-        The scenario varied (B0).
     base : mapping, optional
         Per engine, the settings the variations start from (default: ``accurate``).
-    make_run : callable
-        ``make_run(job, method, preset, variation, knobs)`` builds a :class:`Run`
-        (the caller knows settings hashes and versions).
 
     Returns
     -------
-    runs, variations, skipped
-        Planned runs (one per variation), the variations, and what was skipped.
+    methods, variations, skipped
+        One (method, knob overrides) per variation, the variations, and what was
+        skipped with the reasons.
     """
-    runs: list[Run] = []
+    methods: list[tuple[Method, dict[str, Any]]] = []
     variations: list[Variation] = []
     skipped: list[Skipped] = []
     for eng in engines:
@@ -248,101 +237,6 @@ def plan_sensitivity(engines: Sequence[str], scenario: Scenario, *,
                 settings = {**start, **v.overrides}
                 cls.settings(settings.get("preset"),
                              **{k: x for k, x in settings.items() if k != "preset"})
-                method = f"{eng}[{v.label}]"
-                job = Job(scenario, eng, settings, label=method)
-                runs.append(make_run(job, method, str(start.get("preset", "")), v.label,
-                                     v.overrides))
+                methods.append((Method.of(eng, settings, variation=v.label), dict(v.overrides)))
                 variations.append(v)
-    return runs, variations, skipped
-
-
-def sensitivity_table(number: int, scenario: Scenario, variations: Sequence[Variation],
-                      skipped: Sequence[Skipped], rows: Mapping[str, Mapping[str, Any]],
-                      ref_row: Mapping[str, Any] | None) -> Table:
-    """Error and cost of every variation (and the skipped ones, with their reasons).
-
-    Parameters
-    ----------
-    number : int
-        Table number.
-    scenario : Scenario
-        The scenario varied.
-    variations : sequence of Variation
-        What was run.
-    skipped : sequence of Skipped
-        What was not, and why.
-    rows : mapping
-        Method label (``engine[knob=value]``) → result row.
-    ref_row : mapping or None
-        The analytic reference's row (its time to rest goes in the caption).
-    """
-    t_rest = fmt_seconds(ref_row["time_to_rest"]) if ref_row else "–"
-    t = Table(
-        key="sensitivity", title=f"Table {number}. Sensitivity of {scenario.name} to the "
-                                 "paper's Table 2 variations",
-        caption=(f"Each of the paper's knobs varied alone on the {scenario.name} free-rocking "
-                 "case, starting from each engine's accurate preset and applied to the "
-                 "engine's closest setting (column 'engine setting'). Error against "
-                 "Housner's solution max |θ − θ_ref|/λ, time to rest (Housner: "
-                 f"{t_rest} s), wall time and real-time factor. Knobs an engine does not "
-                 "have are listed with the reason."),
-        columns=["knob", "paper value", "engine", "engine setting", "status", "max |Δθ|/λ",
-                 "t_rest (s)", "wall (s)", "RTF"])
-    for knob in KNOBS:
-        for v in [x for x in variations if x.knob == knob.key]:
-            r = rows.get(f"{v.engine}[{v.label}]")
-            val = f"{v.value:g} {knob.unit}".strip() if isinstance(v.value, float) else \
-                f"{v.value} {knob.unit}".strip()
-            setting = Cell(v.mapping, note=t.note(v.note) if v.note else 0, title=v.note)
-            head = [Cell(knob.title, kind="head"), val, v.engine, setting]
-            if r is None:
-                t.add_row([*head, Cell("not run", kind="crashed"), "", "", "", ""])
-                continue
-            st = r["status"]
-            stc = Cell("ok") if st == "ok" else t.status_cell(st, r["message"], v.engine)
-            err = Cell(fmt_error(r["max_error"])) if st == "ok" else Cell("")
-            t.add_row([*head, stc, err,
-                       Cell(fmt_seconds(r["time_to_rest"])) if st == "ok" else Cell(""),
-                       fmt_seconds(r["wall_time"]),
-                       fmt_factor(r["realtime_factor"]) if st in ("ok", "overturned") else ""])
-        for s in [x for x in skipped if x.knob == knob.key]:
-            val = "all" if s.value is None else str(s.value)
-            t.add_row([Cell(knob.title, kind="head"), val, s.engine, "–",
-                       Cell("⊘ not varied", kind="unsupported", note=t.note(s.reason),
-                            title=s.reason), "", "", "", ""])
-    return t
-
-
-def sensitivity_figures(out: Path, scenario: Scenario, variations: Sequence[Variation],
-                        trajs: Mapping[str, Trajectory], reference: Trajectory | None,
-                        ) -> list[tuple[Path, str]]:
-    """One figure per knob (panels per engine), like the paper's Fig. 4.
-
-    Returns
-    -------
-    list of (Path, str)
-        PNG paths and captions.
-    """
-    figs = []
-    for knob in KNOBS:
-        vs = [v for v in variations if v.knob == knob.key]
-        if not vs:
-            continue
-        panels: list[tuple[str, dict[str, Trajectory]]] = []
-        for eng in dict.fromkeys(v.engine for v in vs):
-            d = {}
-            for v in vs:
-                if v.engine == eng and f"{eng}[{v.label}]" in trajs:
-                    unit = f" {knob.unit}" if knob.unit else ""
-                    val = f"{v.value:g}" if isinstance(v.value, float) else str(v.value)
-                    d[f"{knob.title} = {val}{unit}"] = trajs[f"{eng}[{v.label}]"]
-            panels.append((eng, d))
-        title = f"{knob.title} varied ({', '.join(map(str, knob.values))} {knob.unit})".strip()
-        path = sensitivity_figure(Path(out) / "figures" / f"sensitivity-{knob.key}.png",
-                                  scenario, title.replace(" )", ")"), panels, reference)
-        maps = "; ".join(sorted({f"{v.engine}: {v.mapping.split(' = ')[0]}" for v in vs}))
-        notes = " ".join(sorted({v.note + "." for v in vs if v.note}))
-        figs.append((path, f"{scenario.name} free rocking with the {knob.title} varied as in "
-                           f"the paper's Table 2, one panel per engine, Housner's solution in "
-                           f"black (engine knobs: {maps}). {notes}".strip()))
-    return figs
+    return methods, variations, skipped

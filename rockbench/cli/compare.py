@@ -14,8 +14,9 @@ import shlex
 from pathlib import Path
 
 from rockbench.cli import Progress, add_engine_arguments, engine_settings
+from rockbench.cli.matrix import check_parallel_arguments
 from rockbench.errors import RockbenchError, UnknownScenario
-from rockbench.report.matrix_command import check_parallel_arguments
+from rockbench.store import DEFAULT_DB
 
 __all__ = ["configure", "execute", "DEFAULT_PRESETS"]
 
@@ -23,9 +24,17 @@ __all__ = ["configure", "execute", "DEFAULT_PRESETS"]
 DEFAULT_PRESETS = ("accurate", "fast")
 
 
+def add_store_arguments(p: argparse.ArgumentParser) -> None:
+    """``--db FILE`` and ``--no-db``: where a study records its runs."""
+    p.add_argument("--db", default=DEFAULT_DB, metavar="FILE",
+                   help=f"results store (SQLite) that records every run as it finishes and "
+                        f"that --resume and `rockbench history` read (default: ./{DEFAULT_DB})")
+    p.add_argument("--no-db", action="store_true", help="do not write the results store")
+
+
 def configure(p: argparse.ArgumentParser) -> None:
     """Add the ``compare`` options to ``p``."""
-    from rockbench.report.sensitivity import SUITE
+    from rockbench.studies.sensitivity import SUITE
 
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument("--suite", metavar="NAME",
@@ -51,8 +60,10 @@ def configure(p: argparse.ArgumentParser) -> None:
                    help="wall-time limit per run in s (default: 300 s + 60 s per simulated "
                         "second, generous)")
     p.add_argument("--resume", action="store_true",
-                   help="reuse runs already in DIR/trajectories with the same settings hash, "
-                        "scenario and engine version (crashed and timed-out runs are redone)")
+                   help="reuse finished runs found in the results store (same scenario, "
+                        "settings, engine and rockbench versions) whose trajectory file is "
+                        "intact; crashed, timed-out and torn runs are redone")
+    add_store_arguments(p)
     p.add_argument("--sensitivity", action="store_true",
                    help=f"also run the sensitivity study on B0 (the {SUITE} pseudo-suite)")
     p.add_argument("--link-figures", action="store_true",
@@ -79,6 +90,10 @@ def _command_line(args: argparse.Namespace) -> str:
         parts += ["--jobs", str(args.jobs)]
     if args.timeout:
         parts += ["--timeout", f"{args.timeout:g}"]
+    if args.no_db:
+        parts.append("--no-db")
+    elif args.db != DEFAULT_DB:
+        parts += ["--db", args.db]
     for flag in ("resume", "sensitivity", "link_figures", "no_isolate"):
         if getattr(args, flag):
             parts.append("--" + flag.replace("_", "-"))
@@ -88,10 +103,12 @@ def _command_line(args: argparse.Namespace) -> str:
 def execute(args: argparse.Namespace) -> int:
     """Run the comparison and write the report; 0 when the report is written."""
     from rockbench.engines import engine_class, resolve_engine_names
-    from rockbench.report.compare import CompareOptions, run_comparison
-    from rockbench.report.results import REFERENCE
-    from rockbench.report.sensitivity import SUITE
+    from rockbench.method import REFERENCE
+    from rockbench.report.compare_report import write_report
+    from rockbench.runner import ExecutionOptions
     from rockbench.scenarios import get_scenario, get_suite, resolve_scenarios, suites
+    from rockbench.studies.compare import CompareOptions, run_comparison
+    from rockbench.studies.sensitivity import SUITE
 
     sensitivity = bool(args.sensitivity)
     if args.suite == SUITE:
@@ -137,22 +154,26 @@ def execute(args: argparse.Namespace) -> int:
     label = args.suite or "custom"
     opts = CompareOptions(
         scenarios=scenarios, engines=[e for e in engines if e != REFERENCE], out=out,
-        presets=presets, overrides=overrides, jobs=args.jobs, timeout=args.timeout,
-        resume=args.resume, sensitivity=sensitivity, isolate=not args.no_isolate,
-        suite=label, command=_command_line(args), quiet=args.quiet,
-        embed_figures=not args.link_figures)
+        presets=presets, overrides=overrides, timeout=args.timeout,
+        execution=ExecutionOptions(jobs=args.jobs, isolate=not args.no_isolate),
+        resume=args.resume, db=None if args.no_db else Path(args.db),
+        sensitivity=sensitivity,
+        suite=label, command=_command_line(args), embed_figures=not args.link_figures)
 
     def progress(total: int, description: str) -> Progress:
         return Progress(total, description, quiet=args.quiet)
 
     result = run_comparison(opts, progress=None if args.quiet else progress)
+    files = write_report(result)
     if not args.quiet:
         counts: dict[str, int] = {}
-        for r in result.rows:
-            counts[r["status"]] = counts.get(r["status"], 0) + 1
+        for r in result.results:
+            counts[r.status.value] = counts.get(r.status.value, 0) + 1
         summary = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
-        print(f"{len(result.rows)} results ({summary}); {result.ran} run, "
+        print(f"{len(result.results)} results ({summary}); {result.ran} run, "
               f"{result.reused} reused; {result.wall_time:.1f} s")
-        for f in result.files:
+        for f in files:
             print(f"wrote {f}")
+        if opts.db is not None:
+            print(f"runs recorded in {opts.db} (see `rockbench history`)")
     return 0

@@ -27,12 +27,12 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "engines": ("rockbench.cli", "list engine plugins, availability and versions"),
     "scenarios": ("rockbench.cli", "list the built-in scenarios and suites"),
     "run": ("rockbench.cli", "run one scenario on engines and the analytic reference"),
-    "compare": ("rockbench.report.command", "run a suite on engines and write the report"),
-    "matrix": ("rockbench.report.matrix_command", "engines × scenarios pass/fail matrix"),
-    "sweep": ("rockbench.report.sweep_command", "settings grids: accuracy vs cost, stability"),
-    "tune": ("rockbench.report.sweep_command", "find the cheapest settings meeting a target"),
-    "history": ("rockbench.report.matrix_command", "metrics of a cell across stored runs"),
-    "spectrum": ("rockbench.report.spectrum_command",
+    "compare": ("rockbench.cli.compare", "run a suite on engines and write the report"),
+    "matrix": ("rockbench.cli.matrix", "engines × scenarios pass/fail matrix"),
+    "sweep": ("rockbench.cli.sweep", "settings grids: accuracy vs cost, stability"),
+    "tune": ("rockbench.cli.sweep", "find the cheapest settings meeting a target"),
+    "history": ("rockbench.cli.matrix", "metrics of a cell across stored runs"),
+    "spectrum": ("rockbench.cli.spectrum",
                  "overturning spectra: min overturning acceleration vs pulse frequency"),
 }
 
