@@ -16,6 +16,8 @@ sample interval, which never exceed the peak speed: an honest trajectory can
 not trip it. The engine watchdog applies it to every chunk of samples while a
 run goes on, and :func:`rockbench.runner.run_job` to every finished trajectory
 (:func:`check_trajectory`), which also covers engines that bypass the watchdog.
+:func:`check_trajectory` also makes a block past 90° an ``overturned`` run,
+whatever status the engine gave.
 """
 
 from __future__ import annotations
@@ -102,13 +104,20 @@ class SpeedBound:
 
 
 def check_trajectory(traj: Trajectory, scenario: Scenario) -> Trajectory:
-    """Mark a finished trajectory ``unstable`` if it holds NaN or non-physical speeds.
+    """Give a finished trajectory the status its samples show.
 
-    Only ``ok`` and ``overturned`` trajectories are checked. A failing one is
-    cut after the first offending sample (as the engine watchdog would have
-    stopped) and gets status ``unstable`` with the reason; otherwise it is
-    returned unchanged. Unknown positions (all-NaN ``x``/``z`` columns, as in
-    analytic references) are not checked.
+    A block past 90° (|θ| ≥ π/2, θ wrapped to (−π, π]) has overturned, whatever
+    the engine reported: the trajectory is cut after the first such sample (as
+    the engine watchdog stops) and gets status ``overturned``. This applies to
+    ``ok``, ``overturned`` and ``unstable`` trajectories, the last only when
+    the samples up to the overturn pass the checks below (the block fell over
+    before the engine failed).
+
+    Then ``ok`` and ``overturned`` trajectories holding NaN or non-physical
+    speeds are cut after the first offending sample and get status
+    ``unstable`` with the reason. Unknown positions (all-NaN ``x``/``z``
+    columns, as in analytic references) are not checked. A trajectory that
+    passes is returned unchanged.
 
     Parameters
     ----------
@@ -120,10 +129,38 @@ def check_trajectory(traj: Trajectory, scenario: Scenario) -> Trajectory:
     Returns
     -------
     Trajectory
-        ``traj`` itself or a truncated copy with status ``unstable``.
+        ``traj`` itself or a truncated copy with status ``overturned`` or ``unstable``.
     """
-    if not traj.status.completed or traj.t.size == 0:
+    if traj.t.size == 0 or not (traj.status.completed or traj.status is Status.UNSTABLE):
         return traj
+    over = _first_past_90(traj)
+    if over is None:
+        return _check_physical(traj, scenario) if traj.status.completed else traj
+    i, block = over
+    if traj.status is Status.OVERTURNED and i == traj.t.size - 1:
+        return _check_physical(traj, scenario)  # the engine cut it there itself
+    cut = _cut(traj, i, Status.OVERTURNED, f"block {block + 1} past 90° at t = "
+               f"{traj.t[i]:.4g} s (the engine reported {traj.status})")
+    checked = _check_physical(cut, scenario)
+    if checked.status is Status.UNSTABLE and traj.status is Status.UNSTABLE:
+        return traj  # it failed before it fell: the engine's verdict stands
+    return checked
+
+
+def _first_past_90(traj: Trajectory) -> tuple[int, int] | None:
+    """(sample, block) of the first sample with a block past 90°, or None."""
+    wrapped = np.abs(np.remainder(traj.theta + math.pi, 2.0 * math.pi) - math.pi)
+    with np.errstate(invalid="ignore"):
+        past = wrapped >= 0.5 * math.pi  # NaN compares False: the NaN check reports it
+    rows = np.any(past, axis=1)
+    if not np.any(rows):
+        return None
+    i = int(np.argmax(rows))
+    return i, int(np.argmax(past[i]))
+
+
+def _check_physical(traj: Trajectory, scenario: Scenario) -> Trajectory:
+    """``traj``, or a copy cut at its first NaN or non-physical speed with status unstable."""
     bad = ~np.all(np.isfinite(traj.theta), axis=1)
     known = np.all(np.isfinite(traj.x), axis=0) & np.all(np.isfinite(traj.z), axis=0)
     partly = np.any(np.isfinite(traj.x), axis=0) & ~known
@@ -131,7 +168,7 @@ def check_trajectory(traj: Trajectory, scenario: Scenario) -> Trajectory:
         bad |= np.any(~np.isfinite(traj.x[:, partly]) | ~np.isfinite(traj.z[:, partly]), axis=1)
     if np.any(bad):
         i = int(np.argmax(bad))
-        return _cut(traj, i, f"NaN or infinite pose at t = {traj.t[i]:.4g} s")
+        return _cut(traj, i, Status.UNSTABLE, f"NaN or infinite pose at t = {traj.t[i]:.4g} s")
     if traj.t.size < 2:
         return traj
     bound = SpeedBound.for_scenario(scenario)
@@ -150,10 +187,10 @@ def check_trajectory(traj: Trajectory, scenario: Scenario) -> Trajectory:
         xz = np.column_stack([traj.x[k + 1] - traj.x[k], traj.z[k + 1] - traj.z[k]])
     dtheta = np.diff(np.unwrap(traj.theta[k:k + 2], axis=0), axis=0)[0]
     msg = bound.violation(float(dt[k]), xz, dtheta) or "explosion: non-physical speed"
-    return _cut(traj, k + 1, f"{msg} at t = {traj.t[k + 1]:.4g} s")
+    return _cut(traj, k + 1, Status.UNSTABLE, f"{msg} at t = {traj.t[k + 1]:.4g} s")
 
 
-def _cut(traj: Trajectory, i: int, message: str) -> Trajectory:
+def _cut(traj: Trajectory, i: int, status: Status, message: str) -> Trajectory:
     n = i + 1
     return replace(traj, t=traj.t[:n], theta=traj.theta[:n], x=traj.x[:n], z=traj.z[:n],
-                   wobble=traj.wobble[:n], status=Status.UNSTABLE, message=message)
+                   wobble=traj.wobble[:n], status=status, message=message)

@@ -14,6 +14,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.special import ellipkinc
 
+from rockbench.analytic.overturning import pulse_outcome
 from rockbench.analytic.twoblock import (
     BlockParams,
     Pattern,
@@ -22,9 +23,12 @@ from rockbench.analytic.twoblock import (
     solve_two_blocks,
     two_block_reference,
 )
+from rockbench.bounds import check_trajectory
+from rockbench.engines import engine_class
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import Block, Free, Record, Scenario, SinePulse, Stack
-from rockbench.trajectory import Status
+from rockbench.runner import Job, run_job
+from rockbench.scenarios import Block, Free, Record, Scenario, SinePulse, Stack, get_scenario
+from rockbench.trajectory import Status, Trajectory
 
 G = 9.81
 RHO = 2000.0
@@ -666,9 +670,10 @@ def test_reference_overturn_and_record_input():
     assert tr.status == Status.OVERTURNED
     t_over = tr.extra["overturn_time"]
     assert tr.extra["overturned_block"] in ("stack", "lower", "upper") and 0 < t_over < 2.5
-    after = tr.t >= t_over
-    assert np.all(np.isnan(tr.theta[after])) and np.all(np.isfinite(tr.theta[~after]))
-    assert np.nanmax(np.abs(tr.theta)) <= math.pi / 2 + 1e-9
+    # the samples end at the last output time before the overturn, with no NaN
+    assert tr.t[-1] < t_over <= tr.t[-1] + 1 / sc.output_rate
+    assert np.all(np.isfinite(tr.theta)) and np.all(np.isfinite(tr.x))
+    assert np.max(np.abs(tr.theta)) <= math.pi / 2
     # a recorded accelerogram (piecewise linear, restarts at every sample) runs too
     t = np.linspace(0, 0.5, 101)
     rec = Record(t, 4.0 * np.sin(2 * np.pi * 2.0 * t))
@@ -707,3 +712,99 @@ def test_kick_of_lower_block_and_legacy_rule():
     alpha, p, eta = math.atan2(bc, up.h), math.sqrt(up.m * G * r / i_c), 1 - 2 * up.m * bc**2 / i_c
     np.testing.assert_allclose(old.impact_times[:2], free_impact_times(p, alpha, eta, th0, 2),
                                atol=1e-8)
+
+
+# --------------------------------------------------------- statuses of overturning runs
+#: A slender lower block under a squat, wide top (which cannot lift first: its uplift
+#: threshold g bc/h2 is 10× the stack's), 1 Hz sine pulse of 10 m/s²: the whole stack
+#: goes over during the first excursion (mode 1 of the monolithic block).
+WHOLE = Scenario("whole-stack-over",
+                 Stack((Block(0.30, 0.3, 1.2, density=2500.0),
+                        Block(0.50, 0.3, 0.15, density=2500.0))),
+                 excitation=SinePulse.from_acceleration(10.0, 2 * math.pi), duration=1.5)
+#: The paper's stack under the 5 Hz pulse at 20 mm (issue 15): the top block alone goes.
+TOP = get_scenario("stack-pulse-5.0hz-4mm").replace(excitation=SinePulse(5.0, 0.02),
+                                                      duration=1.5)
+
+
+def test_whole_stack_overturn_is_reported_with_time_and_block():
+    tr = two_block_reference(WHOLE)
+    mono = WHOLE.stack.monolithic(G)
+    housner = pulse_outcome(mono, WHOLE.excitation, g=G)
+    assert housner.overturned and housner.impacts == 0  # mode 1 of the monolithic stack
+    assert tr.status is Status.OVERTURNED
+    # the stack rocks in M, the top tips on the falling lower block only at the end:
+    # the lower block (carrying the top) is the one that passes 90°, near Housner's time
+    assert [n for _, n in tr.extra["patterns"]] == ["R", "M(-1)", "B(-1,+1)"]
+    assert tr.extra["overturned_block"] == "lower"
+    assert tr.extra["overturn_time"] == pytest.approx(housner.overturn_time, abs=5e-3)
+    assert "lower block overturned" in tr.message
+    assert tr.t[-1] < tr.extra["overturn_time"] and np.all(np.isfinite(tr.theta))
+    # the runner's check keeps the reference's status (the NaN tail made it "unstable")
+    assert check_trajectory(tr, WHOLE) is tr
+
+
+def test_top_block_alone_overturn_is_reported_with_time_and_block():
+    tr = two_block_reference(TOP)
+    assert tr.status is Status.OVERTURNED and tr.extra["overturned_block"] == "upper"
+    assert tr.extra["overturn_time"] == pytest.approx(0.669871, abs=1e-6)
+    assert "upper block overturned" in tr.message
+    # the upper block reaches 90° while the lower one stays below its own critical angle
+    assert abs(tr.theta[-1, 1]) > 1.5
+    assert np.max(np.abs(tr.theta[:, 0])) < TOP.blocks[0].rocking(G).lam
+    assert tr.t.size == 670 and np.all(np.isfinite(tr.theta))
+    assert check_trajectory(tr, TOP) is tr
+
+
+@pytest.mark.parametrize("sc, block, t_over", [(WHOLE, 1, 0.754069), (TOP, 2, 0.669871)])
+def test_an_engine_overturns_the_same_block_at_the_same_time(sc, block, t_over):
+    pytest.importorskip("pymunk")
+    tr = run_job(Job(sc, "pymunk", dict(engine_class("pymunk").presets["accurate"])))
+    assert tr.status is Status.OVERTURNED and f"block {block} overturned" in tr.message
+    assert tr.t[-1] == pytest.approx(t_over, abs=0.01)
+    assert two_block_reference(sc).status is tr.status
+
+
+def _engine_like(theta: np.ndarray, status: Status = Status.OK, message: str = "") -> Trajectory:
+    n = theta.shape[0]
+    t = np.arange(n) / 100.0
+    x = np.zeros(theta.shape)
+    return Trajectory(t=t, theta=theta, x=x, z=np.full(theta.shape, 0.5), status=status,
+                      message=message, engine="fake")
+
+
+def test_a_block_past_90_degrees_is_overturned_whatever_the_engine_reported():
+    sc = Scenario("b", Block(0.2, 0.2, 1.0, mass=1.0), duration=1.0, output_rate=100.0)
+    n = 60
+    fall = np.linspace(0.0, 2.5, n)  # 0.0424 rad per 10 ms: within the speed bound
+    theta = np.column_stack([np.zeros(n), fall])
+    i = int(np.argmax(fall >= math.pi / 2))
+    ok = check_trajectory(_engine_like(theta), sc)
+    assert ok.status is Status.OVERTURNED and ok.t.size == i + 1
+    assert ok.message.startswith(f"block 2 past 90° at t = {ok.t[-1]:.4g} s")
+    assert "reported ok" in ok.message
+    # an unwrapped angle (3.5 rad is −2.78 rad wrapped) counts the same
+    spun = np.concatenate([np.linspace(0.0, 1.2, 30), np.linspace(1.24, 3.5, n - 30)])
+    k = int(np.argmax(spun >= math.pi / 2))
+    over = check_trajectory(_engine_like(spun[:, None] + 2 * math.pi), sc)
+    assert over.status is Status.OVERTURNED and over.t.size == k + 1
+    # "unstable" after the block fell over: it fell over
+    late_nan = theta.copy()
+    late_nan[-1] = np.nan
+    fell = check_trajectory(_engine_like(late_nan, Status.UNSTABLE, "NaN at the end"), sc)
+    assert fell.status is Status.OVERTURNED and fell.t.size == i + 1
+    # but a NaN before the fall is a failure, not an overturn
+    early_nan = theta.copy()
+    early_nan[5, 0] = np.nan
+    bad = check_trajectory(_engine_like(early_nan), sc)
+    assert bad.status is Status.UNSTABLE and bad.t.size == 6 and "NaN" in bad.message
+    verdict = _engine_like(early_nan, Status.UNSTABLE, "engine's reason")
+    assert check_trajectory(verdict, sc) is verdict
+    # an engine that stopped at the first sample past 90° keeps its own message
+    own = _engine_like(theta[:i + 1], Status.OVERTURNED, "block 2 overturned")
+    assert check_trajectory(own, sc) is own
+    # upright runs and failed runs are untouched
+    calm = _engine_like(np.zeros((n, 2)))
+    assert check_trajectory(calm, sc) is calm
+    crashed = Trajectory.failed(Status.CRASHED, "boom", n_blocks=2)
+    assert check_trajectory(crashed, sc) is crashed

@@ -338,7 +338,7 @@ class _Run:
             if self.n_phases >= self.max_phases:
                 self.status = "incomplete"
                 self.message = (f"stopped after max_phases={self.max_phases} integration phases "
-                                f"at t={t:.6g} s (chattering); samples after it are NaN")
+                                f"at t={t:.6g} s (chattering); later samples are not computed")
                 return
             self.n_phases += 1
             if p.kind == "R":
@@ -406,7 +406,9 @@ class _Run:
                     self.over_block = "stack"
                 else:
                     self.over_block = "upper" if abs(z[0] + z[1]) >= abs(z[0]) else "lower"
-                self.message = f"{self.over_block} overturned at t={t:.6f} s"
+                who = ("the whole stack" if self.over_block == "stack"
+                       else f"the {self.over_block} block")
+                self.message = f"{who} overturned at t={t:.6f} s"
                 i0 = int(np.searchsorted(self.t_out, t, "left"))
                 self.y[i0:] = np.nan
                 return
@@ -559,9 +561,12 @@ def two_block_reference(scenario: Scenario) -> Trajectory:
     -------
     rockbench.trajectory.Trajectory
         θ of both blocks, centroid x (including the base displacement u_g) and
-        z in the ground frame, status ``ok`` or ``overturned`` (samples after
-        the overturn are NaN), impact times, and ``extra`` with the pattern
-        history, the impacts and the overturned block.
+        z in the ground frame, status ``ok`` or ``overturned`` (the samples end
+        at the last output time before the overturn; the message and ``extra``
+        name the overturned block, ``"stack"``, ``"lower"`` or ``"upper"``, and
+        the overturn time), impact times, and ``extra`` with the pattern history
+        and the impacts. A run stopped early (``max_phases``) ends at its last
+        computed sample with status ``timeout``.
 
     Raises
     ------
@@ -595,7 +600,13 @@ def two_block_reference(scenario: Scenario) -> Trajectory:
     wall = time.perf_counter() - t0
     model = sol.model
     settings["w_rest"] = 1e-3 * min(model.pM * model.alphaM, model.p2 * model.alpha2)
-    g1, g2 = model.positions(sol.theta[:, 0], sol.theta[:, 1])
+    # the solver leaves NaN after an overturn or an early stop: the trajectory ends at
+    # its last computed sample instead (as the single-block reference and the engines
+    # do), so that no NaN is presented as a result
+    computed = np.isfinite(sol.theta[:, 0])
+    n = t_out.size if computed.all() else int(np.argmin(computed))
+    t_out, theta = t_out[:n], sol.theta[:n]
+    g1, g2 = model.positions(theta[:, 0], theta[:, 1])
     ug = np.asarray(exc.displacement(t_out), float)
     x = np.column_stack([g1[:, 0] + ug, g2[:, 0] + ug])
     z = np.column_stack([g1[:, 1], g2[:, 1]])
@@ -605,7 +616,7 @@ def two_block_reference(scenario: Scenario) -> Trajectory:
         msg = (msg + "; " if msg else "") + "contact.eta ignored (two-block impacts follow " \
             "from momentum conservation)"
     return Trajectory(
-        t=t_out, theta=sol.theta, x=x, z=z, wobble=np.zeros_like(sol.theta), status=status,
+        t=t_out, theta=theta, x=x, z=z, wobble=np.zeros_like(theta), status=status,
         message=msg, wall_time=wall, engine="analytic",
         engine_version=f"twoblock-{rockbench.__version__}", settings=settings,
         scenario=scenario.name, impacts=sol.impact_times,
