@@ -1,0 +1,30 @@
+"""Fragility studies: intensity measures, lognormal fragility fits, non-monotone exceedance."""
+
+from rockbench.fragility.fit import (
+    ExceedanceData,
+    FitStatus,
+    FragilityBootstrap,
+    FragilityError,
+    FragilityFit,
+    bootstrap_fragility,
+    fit_fragility,
+)
+from rockbench.fragility.intensity import (
+    IntensityMeasure,
+    PulseRatios,
+    intensity,
+    peak_ground_acceleration,
+    peak_ground_velocity,
+    pulse_ratios,
+    scale_factor,
+    scale_record,
+)
+from rockbench.fragility.monotonicity import Island, find_non_monotone
+
+__all__ = [
+    "ExceedanceData", "FitStatus", "FragilityBootstrap", "FragilityError", "FragilityFit",
+    "bootstrap_fragility", "fit_fragility",
+    "IntensityMeasure", "PulseRatios", "intensity", "peak_ground_acceleration",
+    "peak_ground_velocity", "pulse_ratios", "scale_factor", "scale_record",
+    "Island", "find_non_monotone",
+]
