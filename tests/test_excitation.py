@@ -1,12 +1,32 @@
 """Excitations: exact consistency of acceleration, velocity, displacement; start from rest."""
 
 import math
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 import pytest
 
+from rockbench.analytic.housner import scalar_acceleration, single_block_reference
 from rockbench.errors import ScenarioError
-from rockbench.scenarios import CosinePulse, Free, Record, SinePulse, Sinusoid
+from rockbench.scenarios import (
+    REPORT_GROUPS,
+    Block,
+    CosinePulse,
+    Excitation,
+    Free,
+    Record,
+    Scenario,
+    SinePulse,
+    Sinusoid,
+    checks,
+    excitation_class,
+    excitation_from_table,
+    excitation_kinds,
+    load_scenario,
+    save_scenario,
+)
+from rockbench.store import scenario_hash
 
 EXCITATIONS = [
     SinePulse(3.0, 0.008),
@@ -158,3 +178,171 @@ def test_motion_bounds_are_the_peaks_over_a_whole_motion():
     assert rec.motion_bounds() == pytest.approx(
         (np.max(np.abs(rec.displacement(t))), np.max(np.abs(rec.velocity(t)))), rel=0.01)
     assert Free().motion_bounds() == (0.0, 0.0)
+
+
+# ---------------------------------------------------------------- registry by kind
+BUILT_IN = {"free": (Free, "free"), "sine-pulse": (SinePulse, "pulse"),
+            "cosine-pulse": (CosinePulse, "pulse"), "sinusoid": (Sinusoid, "sine"),
+            "record": (Record, "record")}
+
+
+def test_built_in_kinds_are_registered_with_their_report_groups():
+    assert set(BUILT_IN) <= set(excitation_kinds())
+    for kind, (cls, group) in BUILT_IN.items():
+        assert excitation_class(kind) is cls
+        assert cls.kind == kind and cls.report_group == group
+    assert set(REPORT_GROUPS) == {g for _, g in BUILT_IN.values()}
+
+
+@pytest.mark.parametrize("exc", BOUNDED, ids=lambda e: type(e).__name__)
+def test_every_excitation_reads_back_its_own_table(exc):
+    table = exc.to_table()
+    assert table["type"] == exc.kind
+    back = excitation_from_table(table)
+    t = np.linspace(-0.1, 4.0, 2001)
+    assert type(back) is type(exc)
+    for f in ("acceleration", "velocity", "displacement"):
+        np.testing.assert_array_equal(getattr(back, f)(t), getattr(exc, f)(t))
+
+
+@pytest.mark.parametrize("exc", BOUNDED, ids=lambda e: type(e).__name__)
+def test_scalar_acceleration_is_the_vectorised_one(exc):
+    fast = exc.scalar_acceleration()
+    t = np.concatenate([np.linspace(-0.1, 6.0, 1501), exc.breakpoints])
+    got = np.array([fast(float(x)) for x in t])
+    assert all(type(fast(float(x))) is float for x in t[:5])
+    np.testing.assert_allclose(got, exc.acceleration(t), rtol=0, atol=1e-12)
+    assert scalar_acceleration(exc) is not None  # the solvers' check accepts it
+
+
+@pytest.mark.parametrize("table, match", [
+    ({"type": ["sine-pulse"]}, "type must be a string"),
+    ({"type": "quake"}, "unknown excitation type 'quake'; types: free, sine-pulse"),
+    ("sine-pulse", "must be a table"),
+    ({"type": "free", "frequency": 2.0}, "unknown key 'frequency'"),
+    ({"type": "sinusoid", "frequency": 2.0}, "needs 'amplitude'"),
+    ({"type": "sine-pulse", "frequency": True, "amplitude": 0.01}, "frequency .*boolean"),
+    ({"type": "sine-pulse", "frequency": 3.0, "amplitude": 0.01, "cycles": math.inf},
+     "cycles must be an integer"),
+    ({"type": "sine-pulse", "frequency": 3.0, "amplitude": 0.01, "cycles": 1.5},
+     "cycles must be an integer"),
+    ({"type": "sinusoid", "frequency": 3.0, "amplitude": "0.01"}, "amplitude .*string"),
+    ({"type": "record", "times": [0.0, "0.1"], "accelerations": [0.0, 1.0]}, "item 2"),
+    ({"type": "record", "times": [0.0, 0.1], "accelerations": [0.0, 1.0], "units": "g"},
+     "inline accelerations are in m/s²"),
+    ({"type": "record", "file": 3}, "record file must be a string, got 3"),
+])
+def test_bad_excitation_tables(table, match):
+    with pytest.raises(ScenarioError, match=match):
+        excitation_from_table(table)
+
+
+@pytest.mark.parametrize("make", [
+    lambda: SinePulse(3.0, 1e6),  # A ω² = 3.6e8 m/s²
+    lambda: Sinusoid(1e4, 1.0),
+    lambda: Record([0.0, 0.1, 0.2], [1e308, -1e308, 1e308]),
+    lambda: Record([0.0, 0.1], [0.0, 1.0e5], scale=100.0),
+])
+def test_implausible_base_accelerations_are_refused(make):
+    with pytest.raises(ScenarioError, match=r"above 1e\+06 m/s² are refused"):
+        make()
+
+
+def test_registry_refuses_a_taken_kind_and_an_unknown_group():
+    with pytest.raises(TypeError, match="already registered"):
+        class Again(Free):  # noqa: F841 - defining it is the test
+            kind: ClassVar[str] = "free"
+    with pytest.raises(TypeError, match="report_group"):
+        class Odd(Free):  # noqa: F841
+            kind: ClassVar[str] = "odd"
+            report_group: ClassVar[str] = "quake"
+    assert excitation_class("free") is Free and "odd" not in excitation_kinds()
+
+
+@dataclass(frozen=True)
+class BangBang(Excitation):
+    """A new excitation in one class: ü_g = +level for T/2, then −level for T/2.
+
+    The base ends at rest, displaced by level·T²/4. Defined here only: nothing
+    else in rockbench knows it.
+    """
+
+    level: float
+    period: float
+    kind: ClassVar[str] = "bang-bang"
+    report_group: ClassVar[str] = "pulse"
+    table_keys: ClassVar[frozenset[str]] = frozenset({"level", "period"})
+
+    def __post_init__(self) -> None:
+        checks.number(self.level, "bang-bang level", unit="m/s²")
+        checks.number(self.period, "bang-bang period", low=0.0, unit="s")
+
+    @property
+    def end_time(self) -> float:
+        return self.period
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        return (0.5 * self.period, self.period)
+
+    def acceleration(self, t):
+        t = np.asarray(t, float)
+        h = 0.5 * self.period
+        return np.where((t >= 0) & (t < h), self.level,
+                        np.where((t >= h) & (t <= self.period), -self.level, 0.0))
+
+    def velocity(self, t):
+        tc = np.clip(np.asarray(t, float), 0.0, self.period)
+        h = 0.5 * self.period
+        return self.level * np.where(tc < h, tc, self.period - tc)
+
+    def displacement(self, t):
+        tc = np.clip(np.asarray(t, float), 0.0, self.period)
+        h = 0.5 * self.period
+        return self.level * np.where(tc < h, 0.5 * tc**2,
+                                     0.5 * h * h + h * (tc - h) - 0.5 * (tc - h) ** 2)
+
+    def scalar_acceleration(self):
+        a, h, end = self.level, 0.5 * self.period, self.period
+        return lambda t: (a if 0.0 <= t < h else -a if h <= t <= end else 0.0)
+
+    @classmethod
+    def from_table(cls, table, *, source=None):
+        return cls(**cls.read_fields(table, required=("level", "period")))
+
+    def to_table(self):
+        return {"type": self.kind, "level": self.level, "period": self.period}
+
+
+B0 = Block(1.0, 0.2, 5.0, mass=1.0)
+
+
+def test_a_new_excitation_class_round_trips_through_toml(tmp_path):
+    sc = Scenario("bang", B0, excitation=BangBang(1.2, 0.8), duration=2.0)
+    back = load_scenario(save_scenario(sc, tmp_path / "bang.toml"))
+    assert back == sc and back.excitation.report_group == "pulse"
+    assert scenario_hash(back) == scenario_hash(sc)
+    assert 'type = "bang-bang"' in (tmp_path / "bang.toml").read_text()
+    (tmp_path / "bad.toml").write_text((tmp_path / "bang.toml").read_text()
+                                       .replace("period = 0.8", "period = -0.8"))
+    with pytest.raises(ScenarioError, match=r"bad\.toml: \[excitation\] bang-bang period"):
+        load_scenario(tmp_path / "bad.toml")
+
+
+def test_a_new_excitation_class_drives_the_analytic_reference():
+    lam, p = B0.rocking().lam, B0.rocking().p
+    g = 9.81
+    # below g tan λ the block stays at rest and its centroid follows the base exactly
+    calm = Scenario("calm", B0, excitation=BangBang(0.5 * g * math.tan(lam), 0.8), duration=1.5)
+    tr = single_block_reference(calm)
+    assert str(tr.status) == "ok" and np.all(tr.theta == 0.0)
+    np.testing.assert_allclose(tr.x[:, 0], calm.excitation.displacement(tr.t), atol=1e-15)
+    # linearised model above g λ: θ = −(a/g − λ)(cosh pt − 1) while +a lasts
+    # (a positive base acceleration tips the block to θ < 0)
+    a = 1.5 * g * lam
+    strong = Scenario("strong", B0, excitation=BangBang(a, 1.0), duration=1.5)
+    tr = single_block_reference(strong, linear=True)
+    first = tr.t < 0.5
+    expected = -(a / g - lam) * (np.cosh(p * tr.t[first]) - 1.0)
+    assert np.max(np.abs(tr.theta[first, 0] - expected)) < 1e-7 * lam
+    assert tr.theta[first, 0][-1] < -0.1 * lam

@@ -177,3 +177,49 @@ def test_run_command_reports_an_unreadable_record(tmp_path, capsys):
     assert main(["run", str(path)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("rockbench: error:") and "quake.toml" in err
+
+
+AT2_HEAD = "PEER\nrecord\nunits g\n"
+
+
+@pytest.mark.parametrize("name, data, match", [
+    ("bin.csv", b"0,0\n\xff\xfe,1\n", "not a text record file .*byte 0xff at offset 4"),
+    ("bin.AT2", AT2_HEAD.encode() + b"NPTS=2, DT=0.01\n\x80\x81\n", "byte 0x80"),
+    ("dot.AT2", (AT2_HEAD + "NPTS= 3, DT= . SEC\n0.1 0.2 0.3\n").encode(),
+     "line 4 must give DT as a finite number of seconds > 0, got DT=."),
+    ("inf.AT2", (AT2_HEAD + "NPTS= 3, DT= 1e999 SEC\n0.1 0.2 0.3\n").encode(), "DT=1E999"),
+    ("zero.AT2", (AT2_HEAD + "NPTS= 3, DT= 0.0 SEC\n0.1 0.2 0.3\n").encode(), "DT=0.0"),
+    ("one.AT2", (AT2_HEAD + "NPTS= 1, DT= 0.01 SEC\n0.1 0.2 0.3\n").encode(),
+     "at least 2 samples"),
+    ("nan.csv", b"0,0\n0.1,nan\n0.2,1\n", "NaN or infinite"),
+    ("back.csv", b"0,0\n0.2,1\n0.1,0\n", "strictly increasing"),
+    ("huge.csv", b"0,1e308\n0.1,-1e308\n0.2,1e308\n", r"reaches 1e\+308 m/s²"),
+    ("huge.AT2", (AT2_HEAD + "NPTS= 3, DT= 0.01 SEC\n1e307 -1e307 1e307\n").encode(),
+     r"base accelerations above 1e\+06 m/s² are refused"),
+    ("long.csv", ("t,acc\n0,0\n0.1," + "9" * 500 + "x\n").encode(), r"line 3 is not two .*\.\.\."),
+])
+def test_malformed_record_files_name_the_file(tmp_path, name, data, match):
+    f = tmp_path / name
+    f.write_bytes(data)
+    with pytest.raises(ScenarioError, match=match) as info:
+        Record.from_file(f)
+    msg = str(info.value)
+    assert msg.startswith(f"{f}: ") and "\n" not in msg and len(msg) < 300
+
+
+def test_a_malformed_record_names_the_scenario_and_the_record(tmp_path):
+    path = _write_toml(tmp_path, "synthetic-1.csv")
+    rec = tmp_path / "records" / "synthetic-1.csv"
+    rec.write_bytes(b"0,0\n0.1,1e308\n0.2,-1e308\n")
+    with pytest.raises(ScenarioError, match="accelerations above") as info:
+        load_scenario(path)
+    assert str(info.value).startswith(f"{path}: [excitation] {rec}: ")
+    text = _write_toml(tmp_path, "synthetic-1.csv").read_text()
+    for old, new, match in (("scale = 2.5", 'scale = "2.5"', "record scale must be a finite "
+                             "number, got '2.5' \\(a string\\)"),
+                            ("scale = 2.5", 'units = ["g"]', "record units must be 'g' or"),
+                            ('file = "records/synthetic-1.csv"', "file = 3",
+                             "record file must be a string, got 3")):
+        path.write_text(text.replace(old, new))
+        with pytest.raises(ScenarioError, match=match):
+            load_scenario(path)

@@ -186,3 +186,107 @@ def test_sine_pulse_catalog_consistency():
     sc = get_scenario("single-pulse-3.0hz-8mm")
     assert isinstance(sc.excitation, SinePulse)
     assert sc.output_times()[-1] == pytest.approx(sc.duration)
+
+
+BLOCK = "[[blocks]]\nwidth=0.5\ndepth=0.2\nheight=1.0\nmass=1.0\n"
+
+
+@pytest.mark.parametrize("text, match", [
+    (BLOCK.replace("width=0.5", "width='0.5'"),
+     r"\[\[blocks\]\] #1: block width .*'0.5' \(a string\)"),
+    (BLOCK.replace("width=0.5", "width=true"), r"block width .*true \(a boolean\)"),
+    (BLOCK.replace("width=0.5", "width=[0.5]"), r"block width .*a list"),
+    (BLOCK.replace("width=0.5", "width=0"), r"block width must be a finite number > 0 \(m\)"),
+    (BLOCK.replace("mass=1.0", "mass=-1"), r"block mass must be a finite number > 0 \(kg\)"),
+    (BLOCK.replace("mass=1.0", "mass=nan"), "block mass"),
+    (BLOCK.replace("width=0.5", "width=1979-05-27"), "block width .*a date"),
+    ("name = {a = 1}\n" + BLOCK, "name must be a string, got a table"),
+    ("name = 3\n" + BLOCK, "name must be a string, got 3"),
+    ("description = [1]\n" + BLOCK, "description must be a string"),
+    ("excitation = 'sine'\n" + BLOCK, r"\[excitation\] must be a table, got 'sine'"),
+    ("contact = [1]\n" + BLOCK, r"\[contact\] must be a table"),
+    ("blocks = 'x'\n", r"at least one \[\[blocks\]\] table, got 'x'"),
+    (BLOCK + "[excitation]\ntype=['sine-pulse']\n", "type must be a string"),
+    (BLOCK + "[excitation]\ntype='sine-pulse'\nfrequency=3\namplitude=0.01\ncycles=inf\n",
+     "cycles must be an integer >= 1, got inf"),
+    (BLOCK + "[excitation]\ntype='sinusoid'\nfrequency=inf\namplitude=0.01\n",
+     r"sinusoid frequency must be a finite number > 0 \(Hz\), got inf"),
+    (BLOCK + "[contact]\nfriction='high'\n", "contact friction .*'high'"),
+    ("gravity=-9.81\n" + BLOCK + "[initial]\ntilt_rad=0.1\n", "gravity must be .* > 0"),
+    ("gravity='earth'\n" + BLOCK, "gravity must be a finite number"),
+    (BLOCK + "[initial]\ntilt=true\n", r"\[initial\] tilt must be a number"),
+    (BLOCK + "[initial]\ntilt_rad='0.1'\n", r"\[initial\] tilt_rad must be a finite number"),
+    (BLOCK + "offset='0.1'\n", r"\[\[blocks\]\] #1 offset must be a finite number"),
+    (BLOCK + BLOCK + "offset=0.3\n", "block #2 is off its support"),
+    ("duration=-1\n" + BLOCK, "duration must be a finite number > 0"),
+    ("duration=inf\n" + BLOCK, "duration must be a finite number"),
+    ("output_rate=1e-6\n" + BLOCK, "a single sample over the 10 s run: a trajectory needs at "
+                                   "least 2"),
+])
+def test_wrong_types_and_values_are_named(tmp_path, text, match):
+    f = tmp_path / "bad.toml"
+    f.write_text(text)
+    with pytest.raises(ScenarioError, match=match) as info:
+        load_scenario(f)
+    msg = str(info.value)
+    assert msg.startswith(f"{f}: ") and "\n" not in msg
+
+
+@pytest.mark.parametrize("data, match", [
+    (b"\x00\x01\xff\xfe[[blocks]]", "must be UTF-8 TOML text; byte 0xff at offset 2"),
+    (("a = " + "[" * 5000 + "]" * 5000).encode(), "nested too deeply"),
+    (("a = " + "{b = " * 5000 + "1" + "}" * 5000).encode(), "nested too deeply"),
+])
+def test_undecodable_toml_is_a_typed_error(tmp_path, data, match):
+    f = tmp_path / "bad.toml"
+    f.write_bytes(data)
+    with pytest.raises(ScenarioError, match=match) as info:
+        load_scenario(f)
+    assert str(info.value).startswith(f"{f}: ") and "\n" not in str(info.value)
+
+
+def test_windows_line_endings_read_as_before(tmp_path):
+    f = tmp_path / "crlf.toml"
+    f.write_bytes(b'description = """two\r\nlines"""\r\n' + BLOCK.replace("\n", "\r\n").encode())
+    assert load_scenario(f).description == "two\nlines"
+
+
+@pytest.mark.parametrize("offsets, ok", [
+    ((0.0, 0.0), True),
+    ((0.0, 0.249), True),     # centre of the upper block just inside the lower's face
+    ((0.0, 0.25), False),     # on the edge: no rest position
+    ((0.0, -0.3), False),
+    ((0.5, 0.5), True),       # the bottom block's own position is free
+    ((0.0, 0.15, 0.3), True),  # the top pair's centre of mass (x = 0.225) is on block #1
+    ((0.0, 0.2, 0.4), False),  # each block's centre is over the one below, but the top
+                               # pair's centre of mass (x = 0.3) is off block #1
+])
+def test_stack_offsets_must_keep_each_centre_of_mass_on_its_support(offsets, ok):
+    blk = Block(0.5, 0.2, 1.0, mass=1.0)
+    make = lambda: Stack((blk,) * len(offsets), offsets)  # noqa: E731
+    if ok:
+        assert make().offsets == offsets
+    else:
+        with pytest.raises(ScenarioError, match="off its support"):
+            make()
+
+
+def test_output_rate_gives_at_least_two_samples():
+    blk = Block(0.5, 0.2, 1.0, mass=1.0)
+    sc = Scenario("x", blk, duration=2.0, output_rate=0.5)
+    assert sc.output_times().tolist() == [0.0, 2.0]
+    with pytest.raises(ScenarioError, match=r"output_rate >= 1/duration = 0.5"):
+        Scenario("x", blk, duration=2.0, output_rate=0.4)
+
+
+@pytest.mark.parametrize("make", [
+    lambda: Block(True, 0.2, 1.0, mass=1.0),
+    lambda: Block("0.5", 0.2, 1.0, mass=1.0),
+    lambda: Contact(friction="1"),
+    lambda: Scenario("x", Block(0.5, 0.2, 1.0, mass=1.0), initial_tilt=True),
+    lambda: Scenario("x", Block(0.5, 0.2, 1.0, mass=1.0), duration="10"),
+    lambda: Stack((Block(0.5, 0.2, 1.0, mass=1.0),), ("0",)),
+])
+def test_the_api_never_coerces_strings_or_booleans(make):
+    with pytest.raises(ScenarioError, match="boolean|string"):
+        make()

@@ -130,8 +130,13 @@ class Excitation(ABC):
         return self.to_table()
 
     @classmethod
-    def _fields(cls, table: Mapping[str, Any], required: tuple[str, ...] = ()) -> dict[str, Any]:
-        """The table's fields without ``type``, refusing unknown and missing keys."""
+    def read_fields(cls, table: Mapping[str, Any],
+                    required: tuple[str, ...] = ()) -> dict[str, Any]:
+        """The fields of an ``[excitation]`` table of this kind, for :meth:`from_table`.
+
+        Returns a copy without ``type``; refuses keys outside ``table_keys`` and
+        missing ``required`` ones with a message naming them.
+        """
         data = checks.table(table, "[excitation]")
         data.pop("type", None)
         where = f"[excitation] of type {cls.kind!r}"
@@ -276,7 +281,7 @@ class Free(Excitation):
 
     @classmethod
     def from_table(cls, table: Mapping[str, Any], *, source: Path | None = None) -> Free:
-        cls._fields(table)
+        cls.read_fields(table)
         return cls()
 
     def to_table(self) -> dict[str, Any]:
@@ -308,7 +313,7 @@ class _Pulse(Excitation):
     @classmethod
     def from_table(cls, table: Mapping[str, Any], *, source: Path | None = None) -> _Pulse:
         """A pulse from ``frequency`` and one of ``amplitude`` (m) and ``peak_acceleration``."""
-        data = cls._fields(table, required=("frequency",))
+        data = cls.read_fields(table, required=("frequency",))
         if ("amplitude" in data) == ("peak_acceleration" in data):
             raise ScenarioError(f"[excitation] of type {cls.kind!r} needs exactly one of "
                                 f"'amplitude' (displacement, m) and 'peak_acceleration' "
@@ -618,7 +623,7 @@ class Sinusoid(Excitation):
 
     @classmethod
     def from_table(cls, table: Mapping[str, Any], *, source: Path | None = None) -> Sinusoid:
-        return cls(**cls._fields(table, required=("frequency", "amplitude")))
+        return cls(**cls.read_fields(table, required=("frequency", "amplitude")))
 
     def to_table(self) -> dict[str, Any]:
         d: dict[str, Any] = {"type": self.kind, "frequency": self.frequency,
@@ -782,7 +787,7 @@ class Record(Excitation):
         ``units`` (``"g"`` or ``"m/s2"``) applies to a file; inline accelerations
         are in m/s². ``scale`` multiplies the accelerations.
         """
-        data = cls._fields(table)
+        data = cls.read_fields(table)
         scale = data.get("scale", 1.0)
         checks.number(scale, "record scale")
         if "file" in data:
