@@ -1,4 +1,4 @@
-"""Analytic references: Housner's single block and the two-stacked-block model.
+"""Analytic references: Housner's single block, the two-stacked-block model, Coulomb sliding.
 
 :func:`reference` picks the model that fits a scenario. This package never
 imports :mod:`rockbench.engines`: a reference must not depend on what it checks.
@@ -19,6 +19,18 @@ from rockbench.analytic.overturning import (
     pulse_outcome,
     scan_column,
 )
+from rockbench.analytic.sliding import (
+    Regime,
+    RegimeThresholds,
+    SlidingSolution,
+    SlipPhase,
+    onset_regime,
+    regime_thresholds,
+    slides,
+    sliding_reference,
+    slip_of,
+    solve_sliding,
+)
 from rockbench.analytic.twoblock import (
     BlockParams,
     TwoBlockSolution,
@@ -34,7 +46,9 @@ __all__ = [
     "SingleBlockSolution", "solve_two_blocks", "two_block_reference", "BlockParams",
     "TwoBlockSolution", "free_period", "quarter_period", "amplitude_after_impacts",
     "impact_velocity", "free_impact_times", "pulse_outcome", "scan_column",
-    "minimum_overturning_acceleration",
+    "minimum_overturning_acceleration", "solve_sliding", "sliding_reference", "slides",
+    "slip_of", "SlidingSolution", "SlipPhase", "Regime", "RegimeThresholds",
+    "regime_thresholds", "onset_regime",
 ]
 
 
@@ -46,13 +60,19 @@ def has_reference(scenario: Scenario) -> bool:
 def reference(scenario: Scenario, *, linear: bool = False) -> Trajectory:
     """The analytic reference trajectory of ``scenario``.
 
+    Upright blocks whose friction is below every uplift ratio and whose base
+    acceleration exceeds μ g slide without rocking: they get the exact Coulomb
+    sliding reference (:func:`sliding_reference`, for either value of
+    ``linear``). Otherwise one block gets Housner's solution and two blocks
+    the two-block model.
+
     Parameters
     ----------
     scenario : Scenario
         One block, or two centred stacked blocks.
     linear : bool
-        Single blocks only: Housner's linearised equation (sin x ≈ x, cos x ≈ 1,
-        uplift at g·λ) instead of the exact one.
+        Single rocking blocks only: Housner's linearised equation (sin x ≈ x,
+        cos x ≈ 1, uplift at g·λ) instead of the exact one.
 
     Raises
     ------
@@ -63,6 +83,8 @@ def reference(scenario: Scenario, *, linear: bool = False) -> Trajectory:
         raise UnsupportedScenario(
             "analytic references exist for one block or two centred stacked blocks only"
         )
+    if slides(scenario):
+        return sliding_reference(scenario)
     if scenario.n_blocks == 1:
         return single_block_reference(scenario, linear=linear)
     if linear:

@@ -120,6 +120,7 @@ def suites() -> dict[str, list[str]]:
     groups["paper"] = [n for g in groups.values() for n in g]
     groups["records"] = [n for n in names if n.startswith("record-")]
     groups["smoke"] = ["free-b2-0.5", "single-pulse-3.0hz-8mm", "stack-pulse-4.0hz-4mm"]
+    groups["sliding"] = [n for n in names if n.startswith("slide-")]
     return groups
 
 
@@ -149,3 +150,31 @@ def resolve_scenarios(spec: str) -> list[Scenario]:
         else:
             out.append(get_scenario(item))
     return out
+
+
+#: Low-friction cases, (name, blocks, excitation, μ, duration): μ is below every uplift
+#: ratio b/h, so the blocks slide on the base without rocking (exact reference:
+#: rockbench.analytic.sliding). The stack has one μ for every contact: it slides on the
+#: base as one body while its interface carries the largest friction it can.
+SLIDING_CASES = (
+    ("slide-single-pulse-3.0hz-8mm-mu0.10", Stack((SINGLE2,)), SinePulse(3.0, 0.008), 0.10, 1.5),
+    ("slide-single-pulse-5.0hz-6mm-mu0.15", Stack((SINGLE2,)), SinePulse(5.0, 0.006), 0.15, 1.5),
+    ("slide-single-sine-3.0hz-8mm-mu0.15", Stack((SINGLE2,)), Sinusoid(3.0, 0.008), 0.15, 3.0),
+    ("slide-b2-pulse-2.0hz-20mm-mu0.20", Stack((Block(*FREE_BLOCKS["b2"], mass=1.0),)),
+     SinePulse(2.0, 0.020), 0.20, 1.5),
+    ("slide-stack-pulse-5.0hz-4mm-mu0.10", STACK2, SinePulse(5.0, 0.004), 0.10, 1.5),
+)
+
+
+def _sliding() -> dict[str, Callable[[], Scenario]]:
+    cat: dict[str, Callable[[], Scenario]] = {}
+    for name, stack, exc, mu, dur in SLIDING_CASES:
+        cat[name] = lambda name=name, stack=stack, exc=exc, mu=mu, dur=dur: Scenario(
+            name=name, stack=stack, contact=Contact(friction=mu), excitation=exc,
+            duration=dur, output_rate=RATE,
+            description=f"low friction μ = {mu:g}: slides without rocking (Coulomb sliding)",
+        )
+    return cat
+
+
+_CATALOG.update(_sliding())
