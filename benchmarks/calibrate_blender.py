@@ -1,0 +1,80 @@
+"""Calibrate the Blender (bpy) engine's presets against the Housner reference.
+
+For each preset (``accurate``, ``fast``, ``paper``) it runs the catalog's
+free-rocking cases (B0 at 0.5 λ; B1, B2, B3 at 0.2, 0.5, 0.99 λ; 20 s, 1 kHz
+output, friction 1, restitution 0) and the six Single #2 sine pulses (4 s), and
+prints Markdown tables: max |θ − θ_ref| / λ (until the reference comes to rest),
+relative errors of the first three impact times, the largest out-of-plane
+wobble, the pulse peak ratio and wall times. It ends with the worst free-rocking
+error, the worst impact-time error and the worst pulse-peak deviation of each
+preset, the figures of the engine table.
+
+Usage::
+
+    python benchmarks/calibrate_blender.py [--preset accurate,fast,paper]
+        [--set knob=value ...] [--only free|pulse] [--duration 20] [--cases substr,...]
+
+The reference is ``rockbench.analytic.housner.single_block_reference``.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import numpy as np
+
+from rockbench.engines.blender_engine import BlenderEngine
+
+try:
+    from benchmarks import calibration as cal
+except ImportError:  # run as a file: python benchmarks/calibrate_blender.py
+    import calibration as cal
+
+FREE_COLS = [*cal.CASE, cal.col("max err/λ (to rest)", "err", ".4f"),
+             *cal.impact_cols("+.3f", "impact {} err %"),
+             cal.col("wobble (rad)", lambda r: float(np.max(r["traj"].wobble)), ".1e"), cal.WALL_S]
+PULSE_COLS = [cal.col("pulse", "case"), cal.col("status", "status"),
+              cal.col("max θ/λ engine", "peak", ".4f"), cal.col("max θ/λ ref", "peak_ref", ".4f"),
+              cal.ratio_col("+.2f"), cal.col("base drift (m)", "drift", ".1e"), cal.WALL_S]
+
+
+def summary(free: list[dict], pulses: list[dict]) -> str:
+    """One line: worst free-rocking error, worst impact-time error, worst pulse deviation."""
+    parts = []
+    if free:
+        imp = [abs(x) for r in free for x in r["imp"] if math.isfinite(x)]
+        parts.append(f"free rocking worst {max(r['err'] for r in free):.4f} λ, impact times "
+                     f"within {max(imp, default=math.nan):.2f} %, wall per 20 s case "
+                     f"{np.mean([r['wall'] for r in free]):.2f} s (mean)")
+    if pulses:
+        dev = [100 * (r["ratio"] - 1) for r in pulses]
+        parts.append(f"pulse peaks {min(dev):+.2f} to {max(dev):+.2f} %")
+    return "; ".join(parts)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = cal.parser(__doc__, overhead=False)
+    ap.set_defaults(preset="accurate,fast,paper")
+    args = ap.parse_args(argv)
+    engine = BlenderEngine()
+    ov = cal.overrides(args)
+    print(f"blender {engine.version()}; overrides {ov or 'none'}\n")
+    for preset in args.preset.split(","):
+        s = engine.settings(preset, **ov)
+        print(f"### preset `{preset}`: {s.to_dict()} (Δt = {s.dt:.3g} s)\n")
+        free = pulses = []
+        if args.only in ("free", "all"):
+            free = cal.table(FREE_COLS, cal.select(cal.free_cases(args.duration), args.cases),
+                             lambda sc, s=s: cal.measure_free(engine, s, sc))
+            print()
+        if args.only in ("pulse", "all"):
+            pulses = cal.table(PULSE_COLS, cal.select(cal.pulse_cases(), args.cases),
+                               lambda sc, s=s: cal.measure_pulse(engine, s, sc))
+            print()
+        print(f"{preset}: {summary(free, pulses)}\n", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

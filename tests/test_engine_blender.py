@@ -1,0 +1,184 @@
+"""Physics tests of the Blender (bpy) engine plugin against Housner and closed forms."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+
+import numpy as np
+import pytest
+from engine_helpers import SINGLE2, check_base_follows_excitation, check_sine_pulse_peak
+
+from rockbench.analytic.housner import single_block_reference
+from rockbench.engines import SettingsError
+from rockbench.engines.blender_engine import BLENDER_DEFAULTS, BlenderEngine, BlenderSettings
+from rockbench.errors import EngineUnavailable
+from rockbench.metrics import impact_times
+from rockbench.scenarios import Block, Contact, Scenario, SinePulse, get_scenario
+from rockbench.trajectory import Status
+
+needs_bpy = pytest.mark.skipif(importlib.util.find_spec("bpy") is None,
+                               reason="bpy is not installed (pip install 'rockbench[blender]')")
+
+
+@pytest.fixture(scope="module")
+def engine() -> BlenderEngine:
+    return BlenderEngine()
+
+
+def test_unavailable_without_bpy(monkeypatch: pytest.MonkeyPatch) -> None:
+    # a Python without a bpy wheel: the engine is unavailable with the install hint
+    monkeypatch.setitem(sys.modules, "bpy", None)
+    with pytest.raises(EngineUnavailable, match=r"rockbench\[blender\]"):
+        BlenderEngine.check_available()
+    with pytest.raises(EngineUnavailable):
+        BlenderEngine.version()
+
+
+def test_presets_and_time_step_rule(engine: BlenderEngine) -> None:
+    assert BlenderEngine.requires == ("bpy",) and BlenderEngine.extra == "blender"
+    assert {"accurate", "fast", "paper"} <= set(engine.presets)
+    assert engine.settings("accurate") == engine.Settings()
+    # Δt = 1 / (fps · n_s), Blender's rule (measured in test_time_step_is_frame_over_substeps)
+    assert engine.settings().dt == pytest.approx(1e-4)
+    assert engine.settings("fast").dt == pytest.approx(1e-3)
+    paper = engine.settings("paper")
+    assert paper.dt == pytest.approx(1.0 / (240 * 200)) and paper.frame == pytest.approx(1 / 240)
+    for bad in ({"collision_shape": "sphere"}, {"substeps_per_frame": 0},
+                {"solver_iterations": 1001}, {"fps": 0.0}, {"restitution": 1.5}):
+        with pytest.raises(SettingsError):
+            engine.settings(**bad)
+    with pytest.raises(AttributeError):
+        BlenderSettings().fps = 10.0  # type: ignore[misc]
+
+
+@needs_bpy
+def test_blender_defaults_are_not_zero_and_all_are_overwritten(engine: BlenderEngine) -> None:
+    bpy = engine.library("bpy")
+    # what Blender gives a new rigid body (the documented table is what Blender does)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.rigidbody.world_add()
+    bpy.ops.mesh.primitive_cube_add()
+    bpy.ops.rigidbody.object_add()
+    rb = bpy.context.active_object.rigid_body
+    world, scene = bpy.context.scene.rigidbody_world, bpy.context.scene
+    fresh = {k: getattr(rb, k) for k in ("linear_damping", "angular_damping", "friction",
+                                         "restitution", "collision_margin", "use_margin",
+                                         "collision_shape", "use_deactivation")}
+    fresh |= {k: getattr(world, k) for k in ("substeps_per_frame", "solver_iterations",
+                                             "use_split_impulse")}
+    fresh["fps"] = scene.render.fps / scene.render.fps_base
+    assert fresh == pytest.approx(BLENDER_DEFAULTS)
+    # the plugin sets every one of them from the scenario and the settings
+    sc = Scenario("read-back", Block(0.5, 0.2, 1.0, mass=2.0, chamfer=0.02),
+                  excitation=SinePulse(2.0, 0.001), duration=0.5)
+    sc = sc.replace(contact=Contact(friction=0.64, restitution=0.09))
+    s = engine.settings(fps=480.0, substeps_per_frame=7, solver_iterations=33,
+                        use_split_impulse=False, collision_margin=2e-4)
+    frame = engine._build(sc, s)
+    try:
+        scene = bpy.context.scene
+        world = scene.rigidbody_world
+        assert frame == pytest.approx(1 / 480)
+        assert scene.render.fps / scene.render.fps_base == pytest.approx(480.0)
+        assert (world.substeps_per_frame, world.solver_iterations, world.use_split_impulse) \
+            == (7, 33, False)
+        # the point cache covers the run (0.5 s at 480 fps from frame 1)
+        assert world.point_cache.frame_start == 1
+        assert world.point_cache.frame_end >= 1 + 0.5 * 480
+        bodies = [engine._base, *engine._blocks]
+        for ob in bodies:
+            rb = ob.rigid_body
+            # Bullet multiplies the two bodies' coefficients: sqrt on each
+            assert rb.friction == pytest.approx(0.8) and rb.restitution == pytest.approx(0.3)
+            assert rb.linear_damping == 0.0 and rb.angular_damping == 0.0
+            assert rb.use_margin and rb.collision_margin == pytest.approx(2e-4)
+            assert not rb.use_deactivation
+        assert engine._base.rigid_body.type == "PASSIVE" and engine._base.rigid_body.kinematic
+        blk = engine._blocks[0].rigid_body
+        assert blk.type == "ACTIVE" and not blk.kinematic and blk.mass == pytest.approx(2.0)
+        # a chamfered block is a convex hull even with collision_shape = "box"
+        assert blk.collision_shape == "CONVEX_HULL"
+    finally:
+        engine._teardown()
+    # teardown leaves Blender's global session empty
+    assert len(bpy.data.objects) == 0
+
+
+@needs_bpy
+@pytest.mark.parametrize(("fps", "substeps"), [(24.0, 1), (24.0, 3), (60.0, 4)])
+def test_time_step_is_frame_over_substeps(engine: BlenderEngine, fps: float,
+                                          substeps: int) -> None:
+    # free fall over one frame T of N semi-implicit Euler steps of T/N from rest drops
+    # g T² (N + 1) / (2N): measure N (the paper's rule 1/((n_s + 1)·fps) would give n_s + 1)
+    sc = Scenario("fall", Block(0.5, 0.2, 1.0, mass=1.0), duration=1.0)
+    frame = engine._build(sc, engine.settings(fps=fps, substeps_per_frame=substeps))
+    try:
+        ob = engine._blocks[0]
+        ob.location.z = 2.0
+        engine._scene.frame_set(1)
+        z0 = ob.matrix_world.translation.z
+        engine._advance(1)
+        drop = z0 - ob.matrix_world.translation.z
+    finally:
+        engine._teardown()
+    n = 1.0 / (drop / (0.5 * sc.g * frame * frame) - 1.0)
+    assert n == pytest.approx(substeps, abs=0.05)
+
+
+@needs_bpy
+def test_free_rocking_b0_accurate(engine: BlenderEngine) -> None:
+    sc = get_scenario("free-b0").replace(duration=3.6)
+    ref = single_block_reference(sc)
+    tr = engine.simulate(sc, "accurate")
+    assert tr.status is Status.OK
+    # measured with benchmarks/calibrate_blender.py: the first three impacts within
+    # 0.25 %, max |θ − θ_ref| 0.010 λ over 3.6 s (Blender's floor: see the module docstring)
+    np.testing.assert_allclose(impact_times(tr)[:3], impact_times(ref)[:3], rtol=5e-3)
+    err = np.max(np.abs(tr.theta[:, 0] - ref.theta[:, 0])) / sc.critical_angle
+    assert err <= 0.02
+    # the block never rocks higher than it started (no energy gain)
+    assert np.max(np.abs(tr.theta[:, 0])) <= sc.theta0 * (1 + 1e-4)
+
+
+@needs_bpy
+def test_sine_pulse_peak_accurate(engine: BlenderEngine) -> None:
+    check_sine_pulse_peak(engine, "accurate")
+
+
+@needs_bpy
+def test_base_follows_excitation(engine: BlenderEngine) -> None:
+    # the kinematic base is where the excitation is at every frame ...
+    check_base_follows_excitation(engine, "fast", abs_tol=1e-6)
+    # ... and friction drags a squat block below the uplift threshold with it: Bullet
+    # gives the kinematic base the velocity of its interpolated transforms
+    sc = Scenario("ride", Block(1.0, 0.5, 0.5, mass=10.0), excitation=SinePulse(2.0, 0.002),
+                  duration=1.0)
+    tr = engine.simulate(sc, "fast")
+    assert tr.status is Status.OK
+    assert np.max(np.abs(tr.theta)) < 1e-6
+    np.testing.assert_allclose(tr.x[:, 0], sc.excitation.displacement(tr.t), atol=1e-6)
+    assert tr.x[-1, 0] == pytest.approx(2 * math.pi * 0.002, abs=1e-6)
+
+
+@needs_bpy
+def test_frame_longer_than_output_interval(engine: BlenderEngine) -> None:
+    # the paper's 240 fps against 1 kHz output: one frame per step, interpolated samples
+    sc = get_scenario("free-b2-0.5").replace(duration=1.0)
+    tr = engine.simulate(sc, {"fps": 240.0, "substeps_per_frame": 20})
+    assert tr.status is Status.OK
+    np.testing.assert_allclose(np.diff(tr.t), 1e-3)
+    assert tr.settings["effective_timestep"] == pytest.approx(1 / 240)
+    first = impact_times(tr)[0]
+    assert first == pytest.approx(float(impact_times(single_block_reference(sc))[0]), rel=5e-3)
+
+
+@needs_bpy
+def test_mesh_shape_single_block_only(engine: BlenderEngine) -> None:
+    stack = get_scenario("stack-pulse-4.0hz-4mm").stack
+    tr = engine.simulate(Scenario("rest", stack, duration=0.1), {"collision_shape": "mesh"})
+    assert tr.status is Status.UNSUPPORTED and "mesh" in tr.message
+    tr = engine.simulate(Scenario("rest", SINGLE2, duration=0.5), {"collision_shape": "mesh"})
+    assert tr.status is Status.OK
+    assert np.max(np.abs(tr.theta)) < 1e-3 * SINGLE2.rocking().lam
