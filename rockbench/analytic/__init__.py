@@ -14,6 +14,24 @@ from rockbench.analytic.closed_forms import (
     quarter_period,
 )
 from rockbench.analytic.housner import SingleBlockSolution, single_block_reference, solve_single
+from rockbench.analytic.limit_analysis import (
+    BlockMotion,
+    InterfaceForce,
+    InterfaceMotion,
+    LimitResult,
+    limit_analysis,
+    minimum_stable,
+    stands,
+)
+from rockbench.analytic.limit_geometry import (
+    Assembly,
+    Interface,
+    PlanarBlock,
+    Support,
+    assembly_from_stack,
+    block_stack,
+    semicircular_arch,
+)
 from rockbench.analytic.overturning import (
     minimum_overturning_acceleration,
     pulse_outcome,
@@ -49,6 +67,9 @@ __all__ = [
     "minimum_overturning_acceleration", "solve_sliding", "sliding_reference", "slides",
     "slip_of", "SlidingSolution", "SlipPhase", "Regime", "RegimeThresholds",
     "regime_thresholds", "onset_regime",
+    "limit_analysis", "stands", "minimum_stable", "LimitResult", "BlockMotion",
+    "InterfaceMotion", "InterfaceForce", "Assembly", "PlanarBlock", "Support", "Interface",
+    "block_stack", "semicircular_arch", "assembly_from_stack",
 ]
 
 
