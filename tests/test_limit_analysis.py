@@ -366,6 +366,32 @@ def test_tilted_assembly_has_the_same_interfaces():
         assert j.length == pytest.approx(i.length, rel=1e-12)
 
 
+@pytest.mark.parametrize("friction", [INF, 0.3])
+@pytest.mark.parametrize("direction", [1, -1])
+def test_block_in_a_tight_slot_has_no_mechanism(friction, direction):
+    walls = [Support(np.array([[x0, 0.0], [x0 + 0.5, 0.0], [x0 + 0.5, 2.0], [x0, 2.0]]))
+             for x0 in (-1.0, 0.5)]
+    a = Assembly((PlanarBlock.rectangle(1.0, 1.0, (0.0, 0.5), density=RHO),),
+                 (Support.ground(-1.0, 1.0), *walls))
+    assert len(a.interfaces) == 3
+    r = limit_analysis(a, friction=friction, direction=direction)
+    assert r.status == "no_mechanism" and r.load_factor == INF
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+def test_support_reactions_balance_the_loads_at_collapse(direction):
+    a = semicircular_arch(12, 0.15)
+    r = limit_analysis(a, direction=direction)
+    weight = sum(b.mass for b in a.blocks) * G
+    total = np.zeros(2)
+    for itf, f in zip(a.interfaces, r.interface_forces, strict=True):
+        assert np.all(f.normal >= -1e-9 * weight)
+        if a.is_support(itf.b):  # the force on the support is N n + T t
+            total += f.normal.sum() * itf.normal + f.shear.sum() * itf.tangent
+    np.testing.assert_allclose(total, [direction * r.load_factor * weight, -weight],
+                               atol=1e-8 * weight)
+
+
 # -------------------------------------------------------------- validation
 def test_interfaces_found_with_their_segments():
     a = block_stack([(1.0, 1.0), (0.3, 1.0)], offsets=[0.0, 0.4])

@@ -67,7 +67,7 @@ from typing import Literal
 
 import numpy as np
 from scipy import sparse
-from scipy.optimize import linprog
+from scipy.optimize import OptimizeResult, linprog
 
 from rockbench.analytic.limit_geometry import Assembly
 from rockbench.errors import ScenarioError
@@ -94,7 +94,7 @@ CLASSIFY_TOL = 1e-6
 _HIGHS = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class BlockMotion:
     """What one block does in the collapse mechanism.
 
@@ -128,7 +128,7 @@ class BlockMotion:
         return 1 if self.velocity[2] > 0 else -1
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class InterfaceMotion:
     """Relative motion at one interface in the collapse mechanism.
 
@@ -156,7 +156,7 @@ class InterfaceMotion:
         return self.kind in ("slide", "slide-rotate")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class InterfaceForce:
     """Contact forces of one interface at collapse (the static LP's solution).
 
@@ -187,7 +187,7 @@ class InterfaceForce:
         return (self.normal[0] * np.asarray(p0) + self.normal[1] * np.asarray(p1)) / n
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class LimitResult:
     """Collapse load factor and mechanism of an assembly.
 
@@ -217,7 +217,8 @@ class LimitResult:
         ``rocking``: no joint slips; ``sliding``: joints slip and no block
         rotates; ``mixed``: both.
     interface_forces : tuple of InterfaceForce
-        One per interface, at collapse (one admissible distribution).
+        One per interface, at collapse (one admissible distribution); for an
+        ``unstable`` assembly, at the largest α the joints could balance.
     """
 
     status: Status
@@ -287,13 +288,20 @@ def _system(assembly: Assembly, direction: int, g: float) -> _System:
 
 def _check_inputs(friction: float, direction: int, g: float) -> float:
     mu = float(friction)
-    if not (mu >= 0 and not math.isnan(mu)):
+    if math.isnan(mu) or mu < 0:
         raise ScenarioError(f"friction must be >= 0 (or inf for no sliding), got {friction!r}")
     if direction not in (1, -1):
         raise ScenarioError(f"direction must be +1 or -1, got {direction!r}")
     if not (math.isfinite(g) and g > 0):
         raise ScenarioError(f"g must be finite and > 0, got {g!r}")
     return mu
+
+
+def _solved(res: OptimizeResult, which: str) -> None:
+    """Accept optimal, infeasible and unbounded outcomes; anything else is a solver failure."""
+    if res.status not in (0, 2, 3):
+        raise RuntimeError(f"{which} LP: HiGHS did not conclude (status {res.status}: "
+                           f"{res.message})")
 
 
 def _static(sys: _System, mu: float, alpha: float | None) -> tuple[int, np.ndarray | None]:
@@ -317,6 +325,7 @@ def _static(sys: _System, mu: float, alpha: float | None) -> tuple[int, np.ndarr
         b_ub = np.zeros(2 * npt)
     res = linprog(c, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=bounds, method="highs",
                   options=_HIGHS)
+    _solved(res, "static")
     return res.status, (res.x if res.status == 0 else None)
 
 
@@ -335,6 +344,7 @@ def _kinematic(sys: _System, mu: float) -> tuple[int, float, np.ndarray | None]:
     res = linprog(-sys.dead, A_ub=a_ub, b_ub=np.zeros(a_ub.shape[0]), A_eq=a_eq,
                   b_eq=np.array(b_eq), bounds=[(None, None)] * nq, method="highs",
                   options=_HIGHS)
+    _solved(res, "kinematic")
     if res.status != 0:
         return res.status, math.nan, None
     return 0, float(res.fun), res.x

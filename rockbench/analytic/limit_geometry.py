@@ -100,7 +100,7 @@ def _rotate(p: np.ndarray, angle: float, about: np.ndarray) -> np.ndarray:
                             axis=-1)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PlanarBlock:
     """A rigid convex prism: a polygon in the x–z plane extruded over ``depth`` along y.
 
@@ -120,6 +120,12 @@ class PlanarBlock:
         Centre of gravity (x, z) if it is not the polygon's centroid (e.g. a
         voussoir whose curved intrados is drawn as a chord); must lie inside
         the polygon.
+
+    Notes
+    -----
+    After construction ``mass`` and ``centroid`` are always set (computed
+    from the polygon when not given). Like every class here that holds arrays,
+    blocks compare by identity.
     """
 
     vertices: np.ndarray
@@ -174,7 +180,7 @@ class PlanarBlock:
                            centroid=_rotate(self.centroid, angle, o))  # type: ignore[arg-type]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Support:
     """A fixed convex polygon (the ground, a wall top, an abutment) in the x–z plane.
 
@@ -202,7 +208,7 @@ class Support:
         return Support(_rotate(self.vertices, angle, np.asarray(about, dtype=float)))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Interface:
     """A straight contact segment between two bodies of an :class:`Assembly`.
 
@@ -286,7 +292,7 @@ def _contact(eu: _Edges, ev: _Edges, tol: float) -> tuple[np.ndarray, ...] | Non
     return None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Assembly:
     """Rigid blocks resting on fixed supports, with the contact interfaces between them.
 
