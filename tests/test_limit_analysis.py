@@ -338,6 +338,20 @@ def test_arch_under_horizontal_load_matches_enumeration_and_converges():
         alphas[1], rel=1e-9)
 
 
+def test_arch_with_low_friction_slides_at_a_springing_and_hinges_elsewhere():
+    a = semicircular_arch(16, 0.15)
+    alphas = [limit_analysis(a, friction=mu).load_factor for mu in (0.4, 0.45, 0.5, INF)]
+    # friction can only help: α does not fall as μ grows, and μ = 0.5 already locks sliding
+    assert all(b >= a_ - 1e-12 for a_, b in itertools.pairwise(alphas))
+    assert alphas[2] == pytest.approx(alphas[3], rel=1e-12)
+    r = limit_analysis(a, friction=0.4)  # associative: an upper bound for real Coulomb joints
+    assert r.governing_mode == "mixed" and r.load_factor < 0.5 * alphas[3]
+    active = [(i, j) for i, j in zip(a.interfaces, r.joints, strict=True) if j.kind != "closed"]
+    assert sorted(j.kind for _, j in active) == ["hinge", "hinge", "hinge", "slide"]
+    (slid,) = (i for i, j in active if j.slides)
+    assert a.is_support(slid.b)  # a springing slips on its abutment
+
+
 # ----------------------------------------------------------- tilting table
 def _tilt_to_collapse(a: Assembly, friction: float = INF) -> float:
     """Tilting-table angle (rad, toward +x) at which the assembly stops standing."""
