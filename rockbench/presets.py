@@ -101,7 +101,7 @@ def layered_settings(engines: Sequence[str], *, preset: str | None = None,
     """
     from rockbench.engines import engine_class, parse_set_options
     from rockbench.engines.registry import ALIASES
-    from rockbench.errors import UnknownEngine
+    from rockbench.errors import EngineUnavailable, UnknownEngine
 
     options: dict[str, dict[str, Any]] = {}
     for name, knobs in parse_set_options(list(set_options)).items():
@@ -112,6 +112,13 @@ def layered_settings(engines: Sequence[str], *, preset: str | None = None,
     from_file: dict[str, dict[str, Any]] = {}
     if settings_file:
         from_file = {ALIASES.get(k, k): v for k, v in load_settings_file(settings_file).items()}
+        for name in from_file:  # tables of unselected engines are ignored, not of unknown ones
+            try:
+                engine_class(name)
+            except UnknownEngine as exc:
+                raise SettingsError(f"{settings_file}: [{name}] is not an engine: {exc}") from None
+            except EngineUnavailable:
+                pass
     out: dict[str, dict[str, Any]] = {}
     for name in engines:
         default = None if engine_class(name).capabilities.analytic else preset

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 import types
 import typing
 from collections.abc import Mapping
@@ -33,37 +34,51 @@ def _coerce(value: Any, kind: Any, name: str) -> Any:
             return None
         return _coerce(value, non_none[0], name)
     if origin is typing.Literal:
-        if value not in args:
+        if isinstance(value, (list, dict)) or value not in args:
             raise SettingsError(f"{name} must be one of {', '.join(map(str, args))}, got {value!r}")
         return value
     if origin is tuple:
         if isinstance(value, str):
             value = [v for v in value.replace("(", "").replace(")", "").split(",") if v.strip()]
+        if not isinstance(value, (list, tuple)):
+            raise SettingsError(f"{name} must be a list of values, got {value!r}")
         elem = args[0] if args else float
         return tuple(_coerce(v, elem, name) for v in value)
-    try:
-        if kind is bool:
-            if isinstance(value, str):
-                if value.lower() in _TRUE:
-                    return True
-                if value.lower() in _FALSE:
-                    return False
-                raise ValueError(value)
-            return bool(value)
+    # strings come from the command line and are parsed; typed values (settings
+    # files, the API) must already have the knob's type: a boolean, a list or a
+    # table is never read as a number
+    bad = SettingsError(f"{name} must be {_KIND_NAMES.get(kind, getattr(kind, '__name__', kind))}"
+                        f", got {value!r}")
+    if kind is bool:
+        if isinstance(value, bool):
+            return value
+        if isinstance(value, str) and value.strip().lower() in _TRUE | _FALSE:
+            return value.strip().lower() in _TRUE
+        raise bad
+    if kind in (int, float):
+        if isinstance(value, str):
+            try:
+                value = float(value)
+            except ValueError:
+                raise bad from None
+        elif isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise bad
+        if not math.isfinite(value):
+            raise SettingsError(f"{name} must be a finite number, got {value!r}")
         if kind is int:
-            f = float(value)
-            if f != int(f):
-                raise ValueError(value)
-            return int(f)
-        if kind is float:
-            return float(value)
-        if kind is str:
-            return str(value)
-    except (TypeError, ValueError):
-        raise SettingsError(
-            f"{name} must be of type {getattr(kind, '__name__', kind)}, got {value!r}"
-        ) from None
+            if value != int(value):
+                raise bad
+            return int(value)
+        return float(value)
+    if kind is str:
+        if not isinstance(value, str):
+            raise bad
+        return value
     return value
+
+
+_KIND_NAMES = {bool: "a boolean (true/false)", int: "an integer", float: "a number",
+               str: "a string"}
 
 
 @dataclasses.dataclass(frozen=True)
