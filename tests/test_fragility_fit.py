@@ -8,19 +8,27 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
+from rockbench.analytic.housner import single_block_reference
+from rockbench.errors import ScenarioError
 from rockbench.fragility import (
     ExceedanceData,
     FitStatus,
     FragilityError,
+    IntensityMeasure,
     Island,
+    PulseRatios,
     bootstrap_fragility,
     find_non_monotone,
     fit_fragility,
+    intensity,
+    pulse_ratios,
 )
 from rockbench.fragility.fit import _centre, _fit_batch
+from rockbench.scenarios import Block, Contact, CosinePulse, Scenario, SinePulse, Sinusoid, Stack
 
 THETA, BETA = 0.8, 0.35
 LEVELS = np.geomspace(0.3, 2.5, 12)
+B_ROCK = Block(0.5, 0.2, 1.0, mass=1.0).rocking()
 
 
 def draw(n_per_level: int, seed: int, levels: np.ndarray = LEVELS) -> ExceedanceData:
@@ -257,3 +265,60 @@ def test_set_fractions_drops_and_tolerance():
 def test_bad_monotonicity_input(levels, fractions, tol, match):
     with pytest.raises(FragilityError, match=match):
         find_non_monotone(levels, fractions, tolerance=tol)
+
+
+# --- intensity measures of the analytic pulses ---------------------------------------------
+
+
+@pytest.mark.parametrize(("cls", "c"), [(SinePulse, 2.0), (CosinePulse, 1.0)])
+def test_pulse_measures_in_closed_form(cls, c):
+    g = 9.81
+    rock = Block(0.3, 0.3, 1.2, mass=1.0).rocking(g)
+    pulse = cls(frequency=1.5, amplitude=-0.02)
+    t = np.linspace(0.0, pulse.end_time, 200001)
+    a_p, w = 0.02 * pulse.omega**2, pulse.omega
+    assert intensity(pulse, "pga") == pytest.approx(a_p, rel=1e-12)
+    assert intensity(pulse, "pgv") == pytest.approx(np.max(np.abs(pulse.velocity(t))), rel=1e-9)
+    assert intensity(pulse, "pgv") == pytest.approx(c * a_p / w, rel=1e-12)
+    ratios = pulse_ratios(pulse, rock, g)
+    assert ratios.frequency_ratio == pytest.approx(w / rock.p)
+    assert ratios.acceleration_ratio == pytest.approx(a_p / (g * math.tan(rock.lam)))
+    assert intensity(pulse, "pga-uplift", rock, g) == pytest.approx(ratios.acceleration_ratio)
+    # PGV p / (g tan λ) = c (a_p / (g tan λ)) / (ω_p / p)
+    assert intensity(pulse, "pgv-rocking", rock, g) == pytest.approx(
+        c * ratios.acceleration_ratio / ratios.frequency_ratio, rel=1e-12)
+
+
+def test_pulse_ratios_are_a_similarity_law():
+    """Two blocks of one slenderness under pulses of equal ω_p/p and a_p/(g tan λ) rock alike
+    in the time p·t (Dimitrakopoulos & DeJong 2012)."""
+    g = 9.81
+    runs = []
+    for size in (1.0, 3.0):
+        block = Block(0.25 * size, 0.2, 1.0 * size, mass=1.0)
+        rock = block.rocking(g)
+        pulse = SinePulse.from_acceleration(1.6 * g * math.tan(rock.lam), 3.0 * rock.p)
+        assert pulse_ratios(pulse, rock, g) == PulseRatios(pytest.approx(3.0),
+                                                           pytest.approx(1.6))
+        sc = Scenario(name="similar", stack=Stack((block,)), contact=Contact(friction=1.0),
+                      excitation=pulse, duration=12.0 / rock.p, output_rate=400.0 * rock.p)
+        tr = single_block_reference(sc)
+        runs.append((tr.t * rock.p, tr.theta[:, 0] / rock.lam))
+    (s1, th1), (s2, th2) = runs
+    assert np.max(np.abs(th1)) > 0.3  # it rocks, without overturning
+    assert np.max(np.abs(np.interp(s1, s2, th2) - th1)) < 1e-4
+
+
+def test_intensity_errors():
+    pulse = SinePulse(frequency=2.0, amplitude=0.01)
+    with pytest.raises(ScenarioError, match="needs the block"):
+        intensity(pulse, "pgv-rocking")
+    with pytest.raises(ScenarioError, match="PGV of a 'sinusoid'"):
+        intensity(Sinusoid(frequency=2.0, amplitude=0.01, duration=3.0), "pgv")
+    with pytest.raises(ScenarioError, match="sine or cosine pulse"):
+        pulse_ratios(Sinusoid(frequency=2.0, amplitude=0.01), B_ROCK)
+    assert [(m.value, m.units, m.needs_block) for m in IntensityMeasure] == [
+        ("pga", "m/s2", False), ("pgv", "m/s", False), ("pga-uplift", "1", True),
+        ("pgv-rocking", "1", True)]
+    assert IntensityMeasure.parse(" PGA ") is IntensityMeasure.PGA
+    assert IntensityMeasure.PGA_UPLIFT.label == "PGA / (g tan λ)"
