@@ -482,3 +482,20 @@ def test_builtin_integrator_tables_and_steps_are_scipys():
     with pytest.raises(ValueError, match="integrator"):
         solve_single(B0.rocking(G), g=G, accel=Free().acceleration, t_out=[0, 1],
                      integrator="rk4")
+
+
+def test_squat_block_stops_at_its_first_impact() -> None:
+    """Past λ ≈ 54.7° Housner's η = 1 − 1.5 sin²λ is negative: no rebound is possible, so
+    the block released from a tilt stops at the first impact (η clipped at 0), which comes
+    after the closed-form quarter period."""
+    block = Block(2.0, 0.5, 1.0, mass=10.0)  # λ = atan(2) = 63.4°
+    rock = block.rocking()
+    assert rock.eta < 0.0
+    sc = Scenario("squat", block, initial_tilt=0.5, duration=2.0)
+    ref = single_block_reference(sc)
+    assert ref.status is Status.OK
+    t1 = quarter_period(rock.p, rock.lam, 0.5 * rock.lam)
+    assert ref.impacts is not None and ref.impacts.size == 1
+    assert ref.impacts[0] == pytest.approx(t1, rel=1e-9)
+    after = ref.t > t1 + 1e-9
+    assert np.all(ref.theta[after, 0] == 0.0)

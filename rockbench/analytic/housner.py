@@ -540,7 +540,9 @@ def solve_single(
         raise ValueError(f"|theta0| must be < pi/2, got {theta0!r}")
     if not rest_factor > 0.0:
         raise ValueError(f"rest_factor must be > 0 (Zeno arrest), got {rest_factor!r}")
-    eta = float(rock.eta if eta is None else eta)
+    # Housner's 1 − 2mb²/I_O goes negative past λ ≈ 54.7° (a squat block): no
+    # rebound is possible, the block stops at its first impact (η clipped at 0)
+    eta = float(max(rock.eta, 0.0) if eta is None else eta)
     if not 0.0 <= eta <= 1.0:
         raise ValueError(f"eta must be in [0, 1], got {eta!r}")
     sv = _Solver(rock, g, accel, accel_scalar, eta, linear, rtol, atol, rest_factor, integrator)

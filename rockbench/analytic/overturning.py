@@ -61,9 +61,10 @@ def housner_eta(lam: float) -> float:
     Returns
     -------
     float
-        η (θ̇⁺ = η θ̇⁻), the same as ``RockingProperties.eta`` of an unchamfered block.
+        η (θ̇⁺ = η θ̇⁻), clipped at 0 past λ ≈ 54.7° where the formula goes negative
+        (a squat block stops at its first impact).
     """
-    return 1.0 - 1.5 * math.sin(lam) ** 2
+    return max(0.0, 1.0 - 1.5 * math.sin(lam) ** 2)
 
 
 def outcome_label(code: int) -> str:
