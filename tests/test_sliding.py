@@ -27,6 +27,7 @@ from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import (
     Block,
     Contact,
+    CosinePulse,
     Excitation,
     Scenario,
     SinePulse,
@@ -122,6 +123,28 @@ def test_sine_pulse_slip_starts_when_the_base_exceeds_mu_g(f, amp, mu):
     assert sol.phases[-1].direction == 0 and sol.slip_rate[-1] == 0.0
     starts = [p.start for p in sol.phases]
     assert starts == sorted(starts) and sol.phases[-1].end == 1.5
+
+
+def test_a_cosine_pulse_above_mu_g_slips_from_the_start():
+    """ü_g jumps to A ω² > μ g at t = 0: the slip starts at once, s̈ = −(A ω² − μ g)."""
+    f, amp, mu = 3.0, 0.008, 0.10
+    exc = CosinePulse(f, amp)
+    t = np.linspace(0.0, 0.01, 11)
+    sol = solve_sliding(exc, mu, g=G, t_out=t)
+    assert sol.phases[0].start == 0.0 and sol.phases[0].direction == -1
+    w = 2 * math.pi * f
+    # s = −(u_g − ½ μ g t²) while it slips (u_g = A (1 − cos ωt))
+    np.testing.assert_allclose(sol.slip, -(amp * (1 - np.cos(w * t)) - 0.5 * mu * G * t * t),
+                               rtol=1e-12, atol=1e-16)
+
+
+def test_a_frictionless_block_stays_where_it_is():
+    exc = SinePulse(3.0, 0.008)
+    t = np.linspace(0.0, 1.0, 1001)
+    sol = solve_sliding(exc, 0.0, g=G, t_out=t)
+    np.testing.assert_allclose(sol.slip, -exc.displacement(t), rtol=0, atol=1e-15)
+    assert sol.path == pytest.approx(2 * math.pi * 0.008, rel=1e-12)
+    assert sol.dissipated(1.0) == 0.0
 
 
 def test_stick_while_the_base_acceleration_stays_below_mu_g():
