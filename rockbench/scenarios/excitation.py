@@ -856,7 +856,8 @@ class Record(Excitation):
                                 f"at offset {exc.start} is not UTF-8)") from None
         t, a = _parse_at2(text, path) if is_at2 else _parse_csv(text, path)
         if units == "g":
-            a = a * STANDARD_GRAVITY
+            with np.errstate(over="ignore"):  # an overflow is refused by the checks below
+                a = a * STANDARD_GRAVITY
         try:
             return cls(t, a, scale=scale, source=str(source if source is not None else path),
                        units=units)
