@@ -38,7 +38,10 @@ What Blender really does (measured with bpy 5.0.1, see tests/test_engine_blender
   the margin). ``convex`` is a convex hull of the block's prism; without ``use_margin``
   Blender shrinks it by a 0.04 m margin and rounds it back out by the same radius, which
   moves the rocking pivots; with ``use_margin`` the given ``collision_margin`` is used.
-  ``mesh`` is Blender's triangle-mesh shape (GImpact for active bodies). Blender
+  ``mesh`` is Blender's triangle-mesh shape (GImpact for active bodies). With
+  ``use_margin``, Bullet inflates hulls and meshes by the margin: the prism is shrunk
+  by it so that the block keeps its faces (a 1 mm margin on the uncut prism lifted B0
+  at release: an energy gain the watchdog caught). Blender
   computes inertia from the collision shape: for hulls and meshes Bullet uses the
   shape's bounding box, i.e. the uncut box's inertia the analytic models also use.
 * Blender's Bullet is built in single precision (poses are float32).
@@ -69,6 +72,8 @@ BLENDER_DEFAULTS: dict[str, Any] = {
 }
 
 _SHAPES = {"box": "BOX", "convex": "CONVEX_HULL", "mesh": "MESH"}
+#: Mass of a motor-driven base per kg of blocks: contact impulses barely move it.
+_MOTOR_BASE_MASS = 1e4
 
 
 @dataclass(frozen=True)
@@ -104,6 +109,14 @@ class BlenderSettings(EngineSettings):
         Restitution of every contact; None: the scenario's (square root per body).
     linear_damping, angular_damping : float
         Per object damping (Blender's defaults 0.04 and 0.1; here 0: no hidden damping).
+    drive : {"kinematic", "motor"}
+        How a moving base is driven. ``kinematic``: the paper's animated PASSIVE body,
+        placed at u_g(t_f) at every frame (Bullet derives its velocity from the
+        transforms Blender interpolates per sub-step). ``motor``: a velocity drive, the
+        base an ACTIVE body (10⁴ × the blocks' mass) held by a GENERIC constraint to
+        slide along x only and given the velocity (u_g(t_f) − u_g(t_{f−1})) · fps by a
+        MOTOR constraint's target velocity, set every frame (Blender exposes no rigid
+        body velocity to Python; the motor is the only velocity input).
     """
 
     fps: float = 1000.0
@@ -117,6 +130,7 @@ class BlenderSettings(EngineSettings):
     restitution: float | None = None
     linear_damping: float = 0.0
     angular_damping: float = 0.0
+    drive: Literal["kinematic", "motor"] = "kinematic"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.fps) and 0.0 < self.fps <= 32767.0):
@@ -163,13 +177,13 @@ class BlenderEngine(Engine):
         "accurate": {},
         # Δt 1 ms, one step per frame
         "fast": {"fps": 1000.0, "substeps_per_frame": 1},
-        # the paper's Blender set-up: the largest rate and sub-step count of its Table 2
-        # (240 fps, 200 sub-steps), 100 iterations, box shapes with a 1 mm margin and
-        # Blender's default split impulse (off); the brief does not print the paper's
-        # baseline row, so these are its Table 2 values that its findings imply
-        "paper": {"fps": 240.0, "substeps_per_frame": 200, "solver_iterations": 100,
+        # the paper's Blender set-up as far as it is printed: box shapes, the middle
+        # values of its Table 2 (100 iterations, 20 sub-steps, 1e-5 m margin) at its
+        # highest rate, 240 fps (its 3.5 s per 20 s at 240 fps fits 20 sub-steps, not
+        # 200), Blender's default split impulse (off). Δt = 1/4800 s by Blender's rule.
+        "paper": {"fps": 240.0, "substeps_per_frame": 20, "solver_iterations": 100,
                   "use_split_impulse": False, "collision_shape": "box", "use_margin": True,
-                  "collision_margin": 1e-3},
+                  "collision_margin": 1e-5},
     }
     known_failures: ClassVar[dict[str, str]] = {}
 
@@ -178,6 +192,7 @@ class BlenderEngine(Engine):
         self._scene: Any = None
         self._blocks: list[Any] = []
         self._base: Any = None
+        self._motor: Any = None
         self._frame = 1
         self._u: list[float] = []
         self._poses = np.zeros((0, 7))
@@ -229,20 +244,27 @@ class BlenderEngine(Engine):
                                    half[1])
         base.location = (0.0, 0.0, -half[2])
         moving = not exc.is_free
-        _rigid_body(bpy, base, s, type_="PASSIVE", shape="BOX", mass=1.0, friction=mu,
-                    restitution=e, kinematic=moving)
+        motor = moving and s.drive == "motor"
+        _rigid_body(bpy, base, s, type_="ACTIVE" if motor else "PASSIVE", shape="BOX",
+                    mass=_MOTOR_BASE_MASS * sum(b.m for b in blocks) if motor else 1.0,
+                    friction=mu, restitution=e, kinematic=moving and not motor)
+        self._motor = _motor_drive(bpy, scene, base, s) if motor else None
 
         centroids, th0 = scenario.initial_poses()
         quat = (math.cos(0.5 * th0), 0.0, math.sin(0.5 * th0), 0.0)
         self._blocks = []
         for i, (blk, (cx, cz)) in enumerate(zip(blocks, centroids, strict=True)):
-            ob = _prism(bpy, scene, f"block{i}", blk.profile(), 0.5 * blk.depth)
-            ob.location = (float(cx), 0.0, float(cz))
-            ob.rotation_mode = "QUATERNION"
-            ob.rotation_quaternion = quat
             shape = _SHAPES[s.collision_shape]
             if blk.chamfer > 0.0 and shape == "BOX":
                 shape = "CONVEX_HULL"
+            # Bullet inflates hulls and triangles by the margin Blender gives it (a box
+            # keeps its size): shrink the prism by it so the block has its own faces
+            m = s.collision_margin if s.use_margin and shape != "BOX" else 0.0
+            ob = _prism(bpy, scene, f"block{i}", _offset_polygon(blk.profile(), m),
+                        0.5 * blk.depth - m)
+            ob.location = (float(cx), 0.0, float(cz))
+            ob.rotation_mode = "QUATERNION"
+            ob.rotation_quaternion = quat
             _rigid_body(bpy, ob, s, type_="ACTIVE", shape=shape, mass=blk.m, friction=mu,
                         restitution=e, kinematic=False)
             self._blocks.append(ob)
@@ -260,11 +282,17 @@ class BlenderEngine(Engine):
 
     def _drive_base(self, t: float, dt: float) -> None:
         # the frame ending at t + dt: the base is there when Blender steps into it
-        i = int(round(t / dt)) + 1
-        self._base.location.x = self._u[min(i, len(self._u) - 1)]
+        i = min(int(round(t / dt)) + 1, len(self._u) - 1)
+        if self._motor is None:
+            self._base.location.x = self._u[i]
+        else:
+            # a positive target velocity moves object2 (the base) toward −x (measured)
+            self._motor.motor_lin_target_velocity = -(self._u[i] - self._u[i - 1]) / dt
 
     def _fix_base(self) -> bool:
-        if self._u:
+        if self._motor is not None:
+            self._motor.motor_lin_target_velocity = 0.0
+        elif self._u:
             self._base.location.x = self._u[-1]
         return True
 
@@ -288,7 +316,7 @@ class BlenderEngine(Engine):
             self.base_end = float(self._base.matrix_world.translation.x)
         if self._bpy is not None:
             _empty_scene(self._bpy)
-        self._bpy = self._scene = self._base = None
+        self._bpy = self._scene = self._base = self._motor = None
         self._blocks = []
         self._u = []
 
@@ -300,6 +328,19 @@ def _empty_scene(bpy: Any) -> None:
 
 def _box_profile(b: float, h: float) -> np.ndarray:
     return np.array([[-b, -h], [b, -h], [b, h], [-b, h]])
+
+
+def _offset_polygon(poly: np.ndarray, m: float) -> np.ndarray:
+    """Move every edge of a convex counter-clockwise polygon inward by ``m``."""
+    if m == 0.0:
+        return poly
+    d_in = np.roll(poly, -1, axis=0) - poly  # edge j: vertex j → j + 1
+    d_in /= np.linalg.norm(d_in, axis=1, keepdims=True)
+    n = np.column_stack([-d_in[:, 1], d_in[:, 0]])  # inward normals (counter-clockwise)
+    n_prev = np.roll(n, 1, axis=0)  # the edge ending at vertex j
+    # vertex j moves along the sum of its two edges' normals, m away from both
+    bis = n + n_prev
+    return poly + bis * (m / np.sum(bis * n, axis=1, keepdims=True))
 
 
 def _prism(bpy: Any, scene: Any, name: str, profile: np.ndarray, half_depth: float) -> Any:
@@ -340,3 +381,41 @@ def _rigid_body(bpy: Any, ob: Any, s: BlenderSettings, *, type_: str, shape: str
     rb.collision_margin = s.collision_margin
     rb.use_deactivation = False
     rb.use_start_deactivated = False
+
+
+def _motor_drive(bpy: Any, scene: Any, base: Any, s: BlenderSettings) -> Any:
+    """Constraints of the ``motor`` drive: returns the MOTOR constraint whose target is set.
+
+    A PASSIVE anchor (collision group 20, which nothing else uses) holds the base
+    through a GENERIC constraint locking every freedom but x, and a MOTOR constraint
+    drives its x velocity with an impulse limit no contact reaches.
+    """
+    anchor = _prism(bpy, scene, "anchor", _box_profile(0.5, 0.5), 0.5)
+    anchor.location = (0.0, 0.0, -10.0)
+    _rigid_body(bpy, anchor, s, type_="PASSIVE", shape="BOX", mass=1.0, friction=0.0,
+                restitution=0.0, kinematic=False)
+    groups = anchor.rigid_body.collision_collections
+    groups[19], groups[0] = True, False
+    made = []
+    for kind in ("GENERIC", "MOTOR"):
+        ob = bpy.data.objects.new(kind.lower(), None)
+        scene.collection.objects.link(ob)
+        bpy.context.view_layer.objects.active = ob
+        ob.select_set(True)
+        bpy.ops.rigidbody.constraint_add(type=kind)
+        ob.select_set(False)
+        c = ob.rigid_body_constraint
+        c.object1, c.object2, c.disable_collisions = anchor, base, True
+        c.use_breaking = False
+        c.use_override_solver_iterations = False
+        made.append(c)
+    lock, motor = made
+    for axis in ("lin_y", "lin_z", "ang_x", "ang_y", "ang_z"):
+        setattr(lock, f"use_limit_{axis}", True)
+        setattr(lock, f"limit_{axis}_lower", 0.0)
+        setattr(lock, f"limit_{axis}_upper", 0.0)
+    lock.use_limit_lin_x = False
+    motor.use_motor_lin, motor.use_motor_ang = True, False
+    motor.motor_lin_max_impulse = 1e9
+    motor.motor_lin_target_velocity = 0.0
+    return motor
