@@ -1,5 +1,6 @@
 """Fragility studies: intensity measures, lognormal fragility fits, non-monotone exceedance."""
 
+from rockbench.fragility.compare import MedianComparison, compare_medians
 from rockbench.fragility.fit import (
     ExceedanceData,
     FitStatus,
@@ -26,5 +27,5 @@ __all__ = [
     "bootstrap_fragility", "fit_fragility",
     "IntensityMeasure", "PulseRatios", "intensity", "peak_ground_acceleration",
     "peak_ground_velocity", "pulse_ratios", "scale_factor", "scale_record",
-    "Island", "find_non_monotone",
+    "Island", "find_non_monotone", "MedianComparison", "compare_medians",
 ]

@@ -366,7 +366,7 @@ def _fit_batch(x: np.ndarray, n: np.ndarray, z: np.ndarray, iterations: int = 10
     so this converges). Returns a, b and a mask of the rows that converged.
     """
     rows = z.shape[0]
-    p = np.clip(z.sum(axis=1) / n.sum(), 1e-6, 1.0 - 1e-6)
+    p = np.clip(z.sum(axis=1) / np.broadcast_to(n, z.shape).sum(axis=1), 1e-6, 1.0 - 1e-6)
     a = special.ndtri(p)
     b = np.ones(rows)
     ll = _log_likelihood(a, b, x, n, z)
@@ -434,19 +434,39 @@ def bootstrap_fragility(data: ExceedanceData, n_resamples: int = 1000,
     rng = np.random.default_rng(seed)
     n = np.asarray(data.runs)
     z_star = rng.binomial(n, data.fractions, size=(int(n_resamples), n.size))
-    hi_no, lo_yes, any_yes = _classify(n, z_star)
+    theta, beta = refit(np.asarray(data.levels), n, z_star)
+    good = np.isfinite(theta)
+    return FragilityBootstrap(fit, confidence, percentile_interval(theta[good], confidence),
+                              percentile_interval(beta[good], confidence), int(n_resamples),
+                              int(n_resamples) - int(good.sum()), seed)
+
+
+def refit(levels: np.ndarray, runs: np.ndarray, exceeded: np.ndarray,
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """θ and β fitted to each row of counts, NaN where a row has no finite fit.
+
+    For resampling: ``exceeded`` has shape (B, L) and ``runs`` (L,) or (B, L);
+    a level with no run in a row (n = 0) adds nothing to that row's likelihood.
+    """
+    z = np.asarray(exceeded, float)
+    n = np.broadcast_to(np.asarray(runs, float), z.shape)
+    hi_no, lo_yes, any_yes = _classify(n, z)
     overlap = any_yes & (hi_no >= 0) & (hi_no > lo_yes)
-    x, c = _centre(np.asarray(data.levels))
-    a, b, converged = _fit_batch(x, n.astype(float), z_star[overlap].astype(float))
+    x, c = _centre(np.asarray(levels, float))
+    a, b, converged = _fit_batch(x, n[overlap], z[overlap])
     good = converged & (b > 0)
-    theta = np.exp(c - a[good] / b[good])
-    beta = 1.0 / b[good]
-    n_degenerate = int(n_resamples) - int(good.sum())
-    if theta.size == 0:
-        return FragilityBootstrap(fit, confidence, nan2, nan2, int(n_resamples), n_degenerate,
-                                  seed)
+    rows = np.flatnonzero(overlap)[good]
+    theta = np.full(z.shape[0], math.nan)
+    beta = np.full(z.shape[0], math.nan)
+    theta[rows] = np.exp(c - a[good] / b[good])
+    beta[rows] = 1.0 / b[good]
+    return theta, beta
+
+
+def percentile_interval(values: np.ndarray, confidence: float) -> tuple[float, float]:
+    """The two-sided percentile interval of ``values``; (NaN, NaN) if there are none."""
+    if values.size == 0:
+        return math.nan, math.nan
     q = 100.0 * np.array([0.5 * (1.0 - confidence), 0.5 * (1.0 + confidence)])
-    t_lo, t_hi = np.percentile(theta, q)
-    b_lo, b_hi = np.percentile(beta, q)
-    return FragilityBootstrap(fit, confidence, (float(t_lo), float(t_hi)),
-                              (float(b_lo), float(b_hi)), int(n_resamples), n_degenerate, seed)
+    lo, hi = np.percentile(values, q)
+    return float(lo), float(hi)
