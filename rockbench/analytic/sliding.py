@@ -18,8 +18,9 @@ displacement of every excitation::
 
 so the solution is exact up to the location of the stick/slip events, found by
 a fine scan of the event functions and Brent's method to machine precision. An
-event shorter than the scan step (default 0.1 ms) can be missed; its slip would
-be of order (μ g)·step²/8, below 5e-9 m for μ ≤ 1.
+excursion of |ü_g| above μ g shorter than the scan step (default 0.1 ms) can be
+missed; the slip it would cause is of order |d²ü_g/dt²|·step⁴ (5e-13 m for a
+5 Hz pulse of 0.5 g).
 
 Assumptions (those of the classical criteria below): a rigid block on a rigid,
 horizontally moving base, no vertical base acceleration, Coulomb friction with
