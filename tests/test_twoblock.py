@@ -754,6 +754,9 @@ def test_top_block_alone_overturn_is_reported_with_time_and_block():
     assert np.max(np.abs(tr.theta[:, 0])) < TOP.blocks[0].rocking(G).lam
     assert tr.t.size == 670 and np.all(np.isfinite(tr.theta))
     assert check_trajectory(tr, TOP) is tr
+    # the reference row of a study (issue 15: it said "unstable")
+    row = run_job(Job(TOP, "analytic", {}))
+    assert row.status is Status.OVERTURNED and row.extra["overturned_block"] == "upper"
 
 
 @pytest.mark.parametrize("sc, block, t_over", [(WHOLE, 1, 0.754069), (TOP, 2, 0.669871)])
