@@ -216,6 +216,8 @@ BLOCK = "[[blocks]]\nwidth=0.5\ndepth=0.2\nheight=1.0\nmass=1.0\n"
     ("gravity='earth'\n" + BLOCK, "gravity must be a finite number"),
     (BLOCK + "[initial]\ntilt=true\n", r"\[initial\] tilt must be a number"),
     (BLOCK + "[initial]\ntilt_rad='0.1'\n", r"\[initial\] tilt_rad must be a finite number"),
+    (BLOCK + "[initial]\ntilt_rad=-0.5\n", r"tilt_rad must be smaller .* λ = 0.463648 rad, "
+                                          r"got -0.5"),
     (BLOCK + "offset='0.1'\n", r"\[\[blocks\]\] #1 offset must be a finite number"),
     (BLOCK + BLOCK + "offset=0.3\n", "block #2 is off its support"),
     ("duration=-1\n" + BLOCK, "duration must be a finite number > 0"),

@@ -40,11 +40,16 @@ def describe(value: Any) -> str:
 
 def is_number(value: Any) -> bool:
     """True for a real number (int, float, NumPy scalar), False for booleans and all else."""
+    t = type(value)
+    if t is float or t is int:  # the common case, without the ABC check
+        return True
     return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
 def _float(value: Any) -> float:
     """``value`` as a float, NaN if it is not a number or overflows one."""
+    if type(value) is float:
+        return value
     if not is_number(value):
         return math.nan
     try:

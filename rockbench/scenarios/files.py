@@ -84,7 +84,11 @@ def scenario_from_dict(data: dict[str, Any], *, source: Path | None = None,
                             f"{checks.describe(tilt)}")
     if "tilt_rad" in initial:
         lam = blocks[0].rocking(float(g)).lam
-        tilt = checks.number(initial["tilt_rad"], "[initial] tilt_rad", unit="rad") / lam
+        rad = checks.number(initial["tilt_rad"], "[initial] tilt_rad", unit="rad")
+        if not abs(rad) < lam:
+            raise ScenarioError(f"[initial] tilt_rad must be smaller in size than the bottom "
+                                f"block's λ = {lam:.6g} rad, got {rad!r}")
+        tilt = rad / lam
     name = checks.text(data.get("name", default_name), "name")
     description = checks.text(data.get("description", ""), "description")
     return Scenario(
