@@ -138,6 +138,23 @@ def test_a_cosine_pulse_above_mu_g_slips_from_the_start():
                                rtol=1e-12, atol=1e-16)
 
 
+def test_a_slip_shorter_than_the_scan_step_is_located():
+    """Peak of a sine pulse 1e-8 above μ g: near the peak the excess is Δ − ½ k u²
+    (half-width d), σ ṡ ∝ Δ(u + d) − k (u³ + d³)/6 vanishes again at u = 2d: the
+    block slips from t_m − d to t_m + 2d, 27 µs here, within one 0.1 ms scan cell."""
+    f, mu = 2.5, 0.1
+    w = 2 * math.pi * f
+    amp = mu * G * (1 + 1e-8) / w**2
+    sol = solve_sliding(SinePulse(f, amp), mu, g=G, t_out=np.linspace(0, 0.5, 501))
+    t_m = 0.25 / f
+    d = (0.5 * math.pi - math.asin(mu * G / (amp * w * w))) / w
+    assert 3 * d < 1e-4
+    (slip,) = [p for p in sol.phases if p.direction != 0]
+    assert slip.direction == -1
+    assert slip.start == pytest.approx(t_m - d, abs=1e-12)
+    assert slip.end - slip.start == pytest.approx(3 * d, rel=1e-5)
+
+
 def test_a_frictionless_block_stays_where_it_is():
     exc = SinePulse(3.0, 0.008)
     t = np.linspace(0.0, 1.0, 1001)

@@ -295,18 +295,18 @@ class _Slider:
         def closing(ts: np.ndarray) -> np.ndarray:
             return -sigma * v(ts)
 
-        step = self.step
+        step, end = self.step, self.t_end
         while True:
-            hit = _first(closing, t0, self.t_end, step)
+            hit = _first(closing, t0, end, step)
             if hit is None:
                 return None
             ta, tb = hit
             if ta > t0:
                 return _root(lambda t: float(closing(np.array([t]))[0]), ta, tb)
-            # the slip closes within the first scan cell (ṡ = 0 at t0): look closer
+            # the slip closes within the first scan cell (ṡ = 0 at t0): look closer there
             if step < 1e-13 * max(1.0, t0):
                 return tb
-            step /= 64.0
+            step, end = step / 64.0, tb
 
     def slip_direction(self, t: float) -> int:
         """σ = −sgn(ü_g) of a slip starting at t (the acceleration just after t decides)."""
