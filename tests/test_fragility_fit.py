@@ -88,6 +88,15 @@ def test_the_fit_maximises_bakers_likelihood():
     assert p == pytest.approx([0.5, norm.cdf(1.0)], rel=1e-12)
 
 
+def test_a_nearly_flat_fit_is_flagged_as_extrapolated():
+    flat = fit_fragility(ExceedanceData((1.0, 2.0, 3.0), (50, 50, 50), (20, 21, 22)))
+    assert flat.ok and flat.extrapolated and flat.median > 3.0 and flat.dispersion > 3.0
+    assert flat.to_dict()["extrapolated"] is True
+    assert flat.level_range == (1.0, 3.0)
+    fit = fit_fragility(draw(20, seed=0))
+    assert not fit.extrapolated and fit.to_dict()["extrapolated"] is False
+
+
 def test_scaling_the_levels_scales_the_median_only():
     data = draw(40, seed=3)
     fit = fit_fragility(data)
@@ -99,10 +108,19 @@ def test_scaling_the_levels_scales_the_median_only():
     assert scaled.log_likelihood == pytest.approx(fit.log_likelihood, rel=1e-10)
 
 
-@pytest.mark.parametrize("seed", range(5))
-def test_bootstrap_refits_agree_with_the_scipy_fit(seed):
-    data = draw(15, seed=100 + seed, levels=np.geomspace(0.4, 1.6, 6))
+HARD = [  # poorly fitting data on which plain Fisher scoring stalls
+    ExceedanceData((0.44487828, 9.88495905, 72.32633896), (1, 6, 18), (1, 0, 18)),
+    ExceedanceData((0.01, 0.0120337784, 0.0219638537, 0.0608022426, 4.93704785, 100.0),
+                   (22, 13, 27, 1, 1, 20), (0, 0, 27, 0, 0, 20)),
+]
+
+
+@pytest.mark.parametrize("case", [*range(5), *HARD])
+def test_bootstrap_refits_agree_with_the_scipy_fit(case):
+    data = case if isinstance(case, ExceedanceData) else draw(
+        15, seed=100 + case, levels=np.geomspace(0.4, 1.6, 6))
     fit = fit_fragility(data)
+    assert fit.ok
     x, c = _centre(np.asarray(data.levels))
     a, b, ok = _fit_batch(x, np.asarray(data.runs, float),
                           np.asarray(data.exceeded, float)[None, :])

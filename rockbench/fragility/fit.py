@@ -35,6 +35,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import Enum
+from typing import Any
 
 import numpy as np
 from scipy import optimize, special
@@ -169,6 +170,8 @@ class FragilityFit:
         Number of intensity levels.
     n_runs : int
         Total number of runs.
+    level_range : tuple of float
+        Lowest and highest intensity level of the data.
     """
 
     status: FitStatus
@@ -178,11 +181,22 @@ class FragilityFit:
     log_likelihood: float
     n_levels: int
     n_runs: int
+    level_range: tuple[float, float]
 
     @property
     def ok(self) -> bool:
         """True for a finite fit."""
         return self.status is FitStatus.OK
+
+    @property
+    def extrapolated(self) -> bool:
+        """True for a finite fit whose median lies outside the tested levels.
+
+        The maximum exists but rests on the tail of the curve only (data that
+        barely change over the levels give a large β and a far median): report
+        it as an extrapolation, not as a measured median.
+        """
+        return self.ok and not self.level_range[0] <= self.median <= self.level_range[1]
 
     def probability(self, x: float | np.ndarray) -> np.ndarray:
         """P(exceed | x) = Φ(ln(x/θ)/β) of the fitted curve.
@@ -204,7 +218,8 @@ class FragilityFit:
                 "dispersion": num(self.dispersion),
                 "median_range": [num(v) for v in self.median_range],
                 "log_likelihood": num(self.log_likelihood), "n_levels": self.n_levels,
-                "n_runs": self.n_runs}
+                "n_runs": self.n_runs, "level_range": list(self.level_range),
+                "extrapolated": self.extrapolated}
 
 
 @dataclass(frozen=True)
@@ -261,11 +276,12 @@ def _log_likelihood(a: np.ndarray | float, b: np.ndarray | float, x: np.ndarray,
 
 
 def _score_terms(u: np.ndarray, n: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """d lnL/du and the expected information weight n φ²/(Φ(1−Φ)) at each level."""
+    """d lnL/du and −d² lnL/du² (≥ 0: ln Φ is concave) at each level."""
     log_phi = -0.5 * u * u - 0.5 * math.log(2.0 * math.pi)
-    h_up = np.exp(log_phi - special.log_ndtr(u))     # φ/Φ
-    h_down = np.exp(log_phi - special.log_ndtr(-u))  # φ/(1−Φ)
-    return z * h_up - (n - z) * h_down, n * h_up * h_down
+    h_up = np.exp(log_phi - special.log_ndtr(u))     # φ/Φ = d ln Φ(u)/du
+    h_down = np.exp(log_phi - special.log_ndtr(-u))  # φ/(1−Φ) = −d ln(1 − Φ(u))/du
+    return (z * h_up - (n - z) * h_down,
+            z * h_up * (u + h_up) + (n - z) * h_down * (h_down - u))
 
 
 def _classify(n: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -285,7 +301,7 @@ def _degenerate(data: ExceedanceData) -> FragilityFit | None:
     n = np.asarray(data.runs)
     z = np.asarray(data.exceeded)
     hi_no, lo_yes, any_yes = (int(v) for v in _classify(n, z))
-    common = {"n_levels": x.size, "n_runs": data.total_runs}
+    common = _common(data)
     nan = math.nan
     if not any_yes:
         return FragilityFit(FitStatus.NONE_EXCEEDED, nan, nan, (float(x[-1]), math.inf),
@@ -306,6 +322,12 @@ def _degenerate(data: ExceedanceData) -> FragilityFit | None:
     return None
 
 
+def _common(data: ExceedanceData) -> dict[str, Any]:
+    """The fields every fit of ``data`` shares."""
+    return {"n_levels": len(data.levels), "n_runs": data.total_runs,
+            "level_range": (data.levels[0], data.levels[-1])}
+
+
 def _not_increasing(data: ExceedanceData) -> FragilityFit:
     """The constant-probability limit (β → ∞) that an increasing lognormal tends to."""
     n = np.asarray(data.runs, float)
@@ -313,7 +335,7 @@ def _not_increasing(data: ExceedanceData) -> FragilityFit:
     p = z.sum() / n.sum()
     ll = float(np.sum(z * math.log(p) + (n - z) * math.log1p(-p)))
     return FragilityFit(FitStatus.NOT_INCREASING, math.nan, math.nan, (0.0, math.inf), ll,
-                        len(data.levels), data.total_runs)
+                        **_common(data))
 
 
 def fit_fragility(data: ExceedanceData) -> FragilityFit:
@@ -351,19 +373,22 @@ def fit_fragility(data: ExceedanceData) -> FragilityFit:
         return _not_increasing(data)
     if not res.success and np.max(np.abs(res.jac)) > 1e-6 * max(1.0, data.total_runs):
         raise FragilityError(f"fragility fit did not converge: {res.message}")
-    theta = math.exp(c - a / b)
+    # a nearly flat fit can put θ beyond the floats (it is then flagged extrapolated)
+    ln_theta = c - a / b
+    theta = math.exp(ln_theta) if ln_theta < 709.0 else math.inf
     return FragilityFit(FitStatus.OK, theta, 1.0 / b, (theta, theta), -float(res.fun),
-                        len(data.levels), data.total_runs)
+                        **_common(data))
 
 
 def _fit_batch(x: np.ndarray, n: np.ndarray, z: np.ndarray, iterations: int = 100,
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Probit MLE (a, b) of many count rows z (R, L) at once, by Fisher scoring.
+    """Probit MLE (a, b) of many count rows z (R, L) at once, by Newton's method.
 
-    The bootstrap refits hundreds of resamples; one vectorised Newton-type
+    The bootstrap refits hundreds of resamples; one vectorised Newton
     iteration over all of them costs about as much as one scipy fit. Each
-    step is halved until the log-likelihood does not decrease (it is concave,
-    so this converges). Returns a, b and a mask of the rows that converged.
+    step is capped (a trust region on u) and halved until the log-likelihood
+    does not decrease (it is concave, so this converges). Returns a, b and a
+    mask of the rows that converged.
     """
     rows = z.shape[0]
     p = np.clip(z.sum(axis=1) / np.broadcast_to(n, z.shape).sum(axis=1), 1e-6, 1.0 - 1e-6)
@@ -384,7 +409,10 @@ def _fit_batch(x: np.ndarray, n: np.ndarray, z: np.ndarray, iterations: int = 10
         failed |= ~(np.isfinite(da) & np.isfinite(db))
         frozen = done | failed
         da, db = np.where(frozen, 0.0, da), np.where(frozen, 0.0, db)
-        step = np.ones(rows)
+        # a trust region: no step moves a level's u = a + b x by more than 2, so that an
+        # overshoot cannot land where Φ saturates and the information vanishes
+        du = np.max(np.abs(da[:, None] + db[:, None] * x), axis=1)
+        step = np.minimum(1.0, 2.0 / np.maximum(du, 1e-300))
         for _ in range(40):
             ll_new = _log_likelihood(a + step * da, b + step * db, x, n, z)
             worse = ll_new < ll - 1e-12 * np.abs(ll)
@@ -458,7 +486,8 @@ def refit(levels: np.ndarray, runs: np.ndarray, exceeded: np.ndarray,
     rows = np.flatnonzero(overlap)[good]
     theta = np.full(z.shape[0], math.nan)
     beta = np.full(z.shape[0], math.nan)
-    theta[rows] = np.exp(c - a[good] / b[good])
+    with np.errstate(over="ignore"):
+        theta[rows] = np.exp(c - a[good] / b[good])
     beta[rows] = 1.0 / b[good]
     return theta, beta
 
