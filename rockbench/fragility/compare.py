@@ -113,8 +113,10 @@ def compare_medians(levels: np.ndarray | list[float], outcomes: np.ndarray,
     for table in tables:
         n, z = _counts(table[rows])
         thetas.append(refit(x, n, z)[0])
-    ratio = thetas[0] / thetas[1]
-    good = np.isfinite(ratio)
+    # a far-extrapolated refit can put θ at 0 or inf: no ratio for that resample
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = thetas[0] / thetas[1]
+    good = np.isfinite(ratio) & (ratio > 0)
     return MedianComparison(fits[0], fits[1], fits[0].median / fits[1].median,
                             percentile_interval(ratio[good], confidence), confidence,
                             int(n_resamples), int(n_resamples) - int(good.sum()), seed)
