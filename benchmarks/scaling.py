@@ -20,7 +20,7 @@ import numpy as np
 
 from benchmarks import ENGINES, best_of, engine_status, interleaved, load, warm
 from rockbench.engines import engine_class, get_engine
-from rockbench.runner import Job, run_jobs
+from rockbench.runner import ExecutionOptions, Job, run_jobs
 from rockbench.scenarios import Block, Scenario, SinePulse, Stack, get_scenario
 
 __all__ = ["run", "stack_scenario"]
@@ -170,7 +170,7 @@ def run(quick: bool = False, repeat: int | None = None) -> tuple[str, dict]:
         duration=4.0)]
     preset = "fast" if quick else "accurate"
     jobs = [Job(sc, e, {"preset": preset}) for e in engines for sc in scen]
-    res = interleaved({j: (lambda j=j: run_jobs(jobs, n_jobs=j, timeout=300))
+    res = interleaved({j: (lambda j=j: run_jobs(jobs, ExecutionOptions(jobs=j, timeout=300)))
                        for j in (1, 2)}, 1 if quick else 2)
     w1, w2 = res[1].wall, res[2].wall
     ok_all = all(_ok(t) for r in res.values() for t in r.result)

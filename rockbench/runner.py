@@ -5,6 +5,12 @@ that run's :class:`~rockbench.trajectory.Status` with a reason; the others
 carry on. Results are handed to a callback as each job finishes, so callers can
 write them incrementally and lose nothing if the run is interrupted.
 
+Every study says how to run through one :class:`ExecutionOptions` (workers,
+time limit, executor, scheduler, isolation; validated once, for every command)
+and dispatches through one function, :func:`map_tasks` (any picklable
+function over tasks, locally or on Dask); :func:`run_jobs` is it applied to
+engine jobs.
+
 Executors
 ---------
 ``"process"`` (default)
@@ -21,6 +27,7 @@ Executors
 
 from __future__ import annotations
 
+import math
 import multiprocessing
 import os
 import pickle
@@ -30,7 +37,7 @@ import sys
 import tempfile
 import time
 import traceback
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from concurrent.futures import TimeoutError as FutureTimeout
 from concurrent.futures import as_completed
 from contextlib import contextmanager
@@ -43,14 +50,81 @@ from pebble import ProcessExpired, ProcessPool
 from rockbench.bounds import check_trajectory
 from rockbench.engines import engine_class, get_engine, register
 from rockbench.errors import RockbenchError, UnknownEngine
+from rockbench.method import Method
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["Job", "run_job", "run_jobs", "default_jobs", "run_job_subprocess", "dask_client",
-           "EXECUTORS"]
+__all__ = ["Job", "ExecutionOptions", "ExecutionError", "TaskFault", "run_job", "run_jobs",
+           "map_tasks", "default_jobs", "run_job_subprocess", "dask_client", "EXECUTORS",
+           "DEFAULT_TIMEOUT"]
 
-#: Names accepted by ``run_jobs(executor=...)`` and ``--executor``.
+#: Names accepted by ``ExecutionOptions(executor=...)`` and ``--executor``.
 EXECUTORS = ("process", "dask")
+#: Time limit of a run when none is given (s): every run has one.
+DEFAULT_TIMEOUT = 600.0
+
+
+class ExecutionError(RockbenchError, ValueError):
+    """Invalid execution options (workers, time limit, executor, scheduler)."""
+
+
+def check_execution(jobs: Any, timeout: Any, executor: Any, scheduler: Any, *,
+                    flag: str = "") -> None:
+    """The one validation of execution options (``flag="--"`` names them as options).
+
+    Raises
+    ------
+    ExecutionError
+        ``jobs`` not an integer >= 1, ``timeout`` not a finite number > 0, an
+        unknown executor, or a scheduler without the Dask executor.
+    """
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise ExecutionError(f"{flag}jobs must be >= 1, got {jobs!r}")
+    if (isinstance(timeout, bool) or not isinstance(timeout, (int, float))
+            or not math.isfinite(timeout) or timeout <= 0):
+        raise ExecutionError(f"{flag}timeout must be a finite number of seconds > 0, "
+                             f"got {timeout!r}")
+    if executor not in EXECUTORS:
+        raise ExecutionError(f"{flag}executor must be one of {', '.join(EXECUTORS)}, "
+                             f"got {executor!r}")
+    if scheduler is not None and scheduler != "" and executor != "dask":
+        raise ExecutionError(f"{flag}scheduler needs {flag}executor dask")
+
+
+@dataclass(frozen=True)
+class ExecutionOptions:
+    """How a study runs its work: the one execution-options type of every study.
+
+    Attributes
+    ----------
+    jobs : int
+        Parallel workers (local processes, or the size of a local Dask cluster).
+    timeout : float
+        Wall-time limit per run in s (finite, > 0: every run has a limit).
+    executor : {"process", "dask"}
+        Local process pool or a Dask distributed cluster.
+    scheduler : str or distributed.Client, optional
+        With ``executor="dask"``: a scheduler address or a connected client;
+        None starts a local cluster of ``jobs`` workers for each call.
+    isolate : bool
+        Run each task in a child process (default). ``False`` runs in this
+        process: no protection against crashes and hangs, no time limit.
+
+    Raises
+    ------
+    ExecutionError
+        Invalid values (:func:`check_execution`).
+    """
+
+    jobs: int = 1
+    timeout: float = DEFAULT_TIMEOUT
+    executor: str = "process"
+    scheduler: Any = None
+    isolate: bool = True
+
+    def __post_init__(self) -> None:
+        check_execution(self.jobs, self.timeout, self.executor, self.scheduler)
+        object.__setattr__(self, "timeout", float(self.timeout))
 
 
 @dataclass(frozen=True)
@@ -66,8 +140,8 @@ class Job:
     settings : Mapping
         Knob overrides; the key ``"preset"`` selects a preset first.
     label : str
-        How the job's method is shown in tables (default: the engine name, plus
-        the preset if one is given).
+        How the job's method is shown in progress lines (default: its
+        :attr:`method`'s label).
     """
 
     scenario: Scenario
@@ -76,12 +150,9 @@ class Job:
     label: str = ""
 
     @property
-    def method(self) -> str:
-        """Display name of the method: ``label`` or ``engine[preset]``."""
-        if self.label:
-            return self.label
-        preset = self.settings.get("preset")
-        return f"{self.engine}[{preset}]" if preset else self.engine
+    def method(self) -> Method:
+        """The method this job runs (engine and requested settings)."""
+        return Method.of(self.engine, self.settings)
 
 
 def default_jobs() -> int:
@@ -159,96 +230,169 @@ def _context() -> multiprocessing.context.BaseContext:
 
 def run_jobs(
     jobs: Iterable[Job],
+    execution: ExecutionOptions | None = None,
     *,
-    n_jobs: int | None = 1,
-    timeout: float | Callable[[Job], float | None] | None = None,
-    isolate: bool = True,
     on_result: Callable[[Job, Trajectory], None] | None = None,
-    executor: str = "process",
-    scheduler: Any = None,
+    timeout_of: Callable[[Job], float | None] | None = None,
 ) -> list[Trajectory]:
     """Run jobs and return their trajectories in the order given.
+
+    Isolated runs get a fresh child process each (locally, or a fresh Python
+    subprocess on a Dask worker); a crash, a hang beyond the time limit or an
+    unpicklable result becomes that job's status.
 
     Parameters
     ----------
     jobs : iterable of Job
         What to run.
-    n_jobs : int, optional
-        Worker processes (None: the machine's cores). Ignored when not isolating
-        and with a Dask scheduler address (the cluster decides).
-    timeout : float or callable, optional
-        Wall-time limit per job in s (or a function of the job); a job that
-        exceeds it is killed and reported as ``timeout``.
-    isolate : bool
-        Run each job in its own child process (default). ``False`` runs in this
-        process, without protection against crashes and hangs.
+    execution : ExecutionOptions, optional
+        Workers, time limit, executor, scheduler and isolation (default:
+        :class:`ExecutionOptions` ``()``: one isolated local worker).
     on_result : callable, optional
         Called as ``on_result(job, trajectory)`` in this process as soon as
         each job finishes.
-    executor : {"process", "dask"}
-        Local process pool or a Dask distributed cluster.
-    scheduler : str or distributed.Client, optional
-        With ``executor="dask"``: the scheduler address (``tcp://host:8786``)
-        or a connected client; None starts a local cluster of ``n_jobs``
-        single-threaded workers for the duration of the call.
+    timeout_of : callable, optional
+        A per-job time limit in s (instead of ``execution.timeout``).
 
     Raises
     ------
     RockbenchError
-        Bad input detected in a job (unknown engine, bad settings, unknown
-        executor, Dask not installed).
+        Bad input detected in a job (unknown engine, bad settings, Dask not
+        installed).
     """
+    ex = execution or ExecutionOptions()
     jobs = list(jobs)
-    results: list[Trajectory | None] = [None] * len(jobs)
 
     def limit(job: Job) -> float | None:
-        return timeout(job) if callable(timeout) else timeout
+        return timeout_of(job) if timeout_of is not None else ex.timeout
+
+    def failed(i: int, fault: TaskFault) -> Trajectory:
+        job = jobs[i]
+        if fault.kind == "timeout":
+            lim = limit(job) or 0.0
+            return _failed(job, Status.TIMEOUT, f"killed after the {lim:g} s limit", lim)
+        return _failed(job, Status.CRASHED, fault.message)
 
     def done(i: int, traj: Trajectory) -> None:
-        results[i] = traj
         if on_result is not None:
             on_result(jobs[i], traj)
 
-    if executor not in EXECUTORS:
-        raise RockbenchError(f"unknown executor {executor!r}; choose one of "
-                             f"{', '.join(EXECUTORS)}")
-    if not jobs:
-        return []
-    if executor == "dask":
-        _run_dask(jobs, limit, done, n_jobs, scheduler)
-        return results  # type: ignore[return-value]
-    if not isolate:
-        for i, job in enumerate(jobs):
-            done(i, run_job(job))
-        return results  # type: ignore[return-value]
+    if ex.executor == "dask":
+        specs = {name: _engine_spec(name) for name in {j.engine for j in jobs}}
+        tasks: list[Any] = [(job, limit(job), specs[job.engine]) for job in jobs]
+        return map_tasks(_subprocess_task, tasks, ex, on_done=done, on_fault=failed)
+    if not ex.isolate:
+        return map_tasks(run_job, jobs, ex, on_done=done)
+    return map_tasks(_pool_job, jobs, ex, on_done=done, on_fault=failed, fresh=True,
+                     timeout_of=lambda i: limit(jobs[i]))
 
-    workers = min(n_jobs or default_jobs(), len(jobs))
-    pool = ProcessPool(max_workers=workers, max_tasks=1, context=_context())
+
+# ---------------------------------------------------------------------- the dispatcher
+@dataclass(frozen=True)
+class TaskFault:
+    """Why a task gave no result: ``timeout`` (killed at its limit), ``died`` (the
+    worker process ended) or ``error`` (an exception that is not bad input)."""
+
+    kind: str
+    message: str
+
+
+def map_tasks(
+    fn: Callable[[Any], Any],
+    tasks: Sequence[Any],
+    execution: ExecutionOptions | None = None,
+    *,
+    on_done: Callable[[int, Any], None] | None = None,
+    on_fault: Callable[[int, TaskFault], Any] | None = None,
+    timeout_of: Callable[[int], float | None] | None = None,
+    fresh: bool = False,
+) -> list[Any]:
+    """Apply a picklable function to each task, locally or on Dask: the one dispatcher.
+
+    Every study's parallel work goes through here (:func:`run_jobs` for engine
+    runs, the spectrum's analytic column scans, ...).
+
+    Parameters
+    ----------
+    fn : callable
+        Module-level (picklable) function of one task.
+    tasks : sequence
+        Its arguments (picklable).
+    execution : ExecutionOptions, optional
+        ``isolate=False`` runs here, one task after the other; otherwise a
+        local process pool of ``jobs`` workers or a Dask cluster.
+    on_done : callable, optional
+        ``on_done(index, result)`` in this process as each task finishes.
+    on_fault : callable, optional
+        ``on_fault(index, fault)`` turns a task that timed out, whose process
+        died or that raised an unexpected exception into a result; without it
+        such a task raises :class:`RockbenchError`.
+    timeout_of : callable, optional
+        Time limit of task ``index`` in s (default ``execution.timeout``);
+        enforced by the local pool. On Dask ``fn`` must enforce its own limit
+        (:func:`run_jobs` runs each job in a subprocess with one).
+    fresh : bool
+        A new worker process for every task (engines keep global state).
+
+    Raises
+    ------
+    RockbenchError
+        Bad input raised by a task (passed through), or a fault without ``on_fault``.
+    """
+    ex = execution or ExecutionOptions()
+    results: list[Any] = [None] * len(tasks)
+
+    def finish(i: int, value: Any) -> None:
+        results[i] = value
+        if on_done is not None:
+            on_done(i, value)
+
+    def fault(i: int, f: TaskFault) -> None:
+        if on_fault is None:
+            raise RockbenchError(f"task {i + 1} of {len(tasks)} failed: {f.message}")
+        finish(i, on_fault(i, f))
+
+    if not tasks:
+        return []
+    if ex.executor == "dask":
+        _map_dask(fn, tasks, ex, finish, fault)
+        return results
+    if not ex.isolate:
+        for i, task in enumerate(tasks):
+            finish(i, fn(task))
+        return results
+
+    def limit(i: int) -> float | None:
+        return timeout_of(i) if timeout_of is not None else ex.timeout
+
+    pool = ProcessPool(max_workers=min(ex.jobs, len(tasks)), max_tasks=1 if fresh else 0,
+                       context=_context())
     try:
-        futures = {pool.schedule(_pool_job, args=(job,), timeout=limit(job)): i
-                   for i, job in enumerate(jobs)}
+        futures = {pool.schedule(fn, args=(task,), timeout=limit(i)): i
+                   for i, task in enumerate(tasks)}
         for fut in as_completed(futures):
             i = futures[fut]
-            job = jobs[i]
             try:
-                traj = fut.result()
+                value = fut.result()
             except FutureTimeout:
-                lim = limit(job) or 0.0
-                traj = _failed(job, Status.TIMEOUT, f"killed after the {lim:g} s limit", lim)
+                fault(i, TaskFault("timeout", f"killed after the {limit(i) or 0.0:g} s limit"))
+                continue
             except ProcessExpired as exc:
-                traj = _failed(job, Status.CRASHED, _death(exc.exitcode))
+                fault(i, TaskFault("died", _death(exc.exitcode)))
+                continue
             except RockbenchError:
                 raise
-            except Exception as exc:  # e.g. unpicklable result
-                traj = _failed(job, Status.CRASHED, f"{type(exc).__name__}: {exc}")
-            done(i, traj)
+            except Exception as exc:  # e.g. an unpicklable result
+                fault(i, TaskFault("error", f"{type(exc).__name__}: {exc}"))
+                continue
+            finish(i, value)
     except BaseException:  # bad input, Ctrl-C: kill the children, keep what was reported
         pool.stop()
         pool.join()
         raise
     pool.close()
     pool.join()
-    return results  # type: ignore[return-value]
+    return results
 
 
 # ---------------------------------------------------------------------- subprocess isolation
@@ -354,26 +498,32 @@ def dask_client(n_jobs: int | None, scheduler: Any) -> Iterator[Any]:
             cluster.close()
 
 
-def _run_dask(jobs: list[Job], limit: Callable[[Job], float | None],
-              done: Callable[[int, Trajectory], None], n_jobs: int | None,
-              scheduler: Any) -> None:
-    with dask_client(n_jobs, scheduler) as client:
+def _subprocess_task(task: tuple[Job, float | None, str]) -> Trajectory:
+    """One Dask task of :func:`run_jobs`: the job in a fresh subprocess with its limit."""
+    job, limit, spec = task
+    return run_job_subprocess(job, limit, spec)
+
+
+def _map_dask(fn: Callable[[Any], Any], tasks: Sequence[Any], ex: ExecutionOptions,
+              finish: Callable[[int, Any], None],
+              fault: Callable[[int, TaskFault], None]) -> None:
+    with dask_client(ex.jobs, ex.scheduler) as client:
         from distributed import as_completed as dask_completed
 
-        specs = {name: _engine_spec(name) for name in {j.engine for j in jobs}}
-        futures = {client.submit(run_job_subprocess, job, limit(job), specs[job.engine],
-                                 pure=False, key=f"rockbench-{i}-{os.getpid()}-{time.time_ns()}"):
-                   i for i, job in enumerate(jobs)}
+        stamp = f"{os.getpid()}-{time.time_ns()}"
+        futures = {client.submit(fn, task, pure=False, key=f"rockbench-{i}-{stamp}"): i
+                   for i, task in enumerate(tasks)}
         try:
             for fut in dask_completed(futures):
                 i = futures[fut]
                 try:
-                    traj = fut.result()
+                    value = fut.result()
                 except RockbenchError:
                     raise
                 except Exception as exc:  # worker lost, unpicklable result, ...
-                    traj = _failed(jobs[i], Status.CRASHED, f"{type(exc).__name__}: {exc}")
-                done(i, traj)
+                    fault(i, TaskFault("error", f"{type(exc).__name__}: {exc}"))
+                    continue
+                finish(i, value)
         except BaseException:
             client.cancel(list(futures))
             raise

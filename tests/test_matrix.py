@@ -12,20 +12,10 @@ import pytest
 
 from rockbench.cli import main
 from rockbench.engines import register, unregister
-from rockbench.report.matrix import (
-    FAIL,
-    REGRESSION,
-    SKIP,
-    BaselineError,
-    Cell,
-    MatrixResult,
-    evaluate,
-    format_grid,
-    load_baseline,
-    regressions,
-    write_junit,
-)
-from rockbench.report.tolerances import ToleranceError, load_tolerances
+from rockbench.evaluation import NUMERIC_METRICS, RunMetrics
+from rockbench.method import Method
+from rockbench.report.grid import format_grid
+from rockbench.report.junit import write_junit
 from rockbench.scenarios import (
     Block,
     Scenario,
@@ -35,6 +25,23 @@ from rockbench.scenarios import (
     save_scenario,
 )
 from rockbench.store import Store
+from rockbench.studies.baseline import (
+    BaselineCell,
+    BaselineError,
+    baseline_data,
+    load_baseline,
+    write_baseline,
+)
+from rockbench.studies.matrix import (
+    FAIL,
+    REGRESSION,
+    SKIP,
+    Cell,
+    MatrixResult,
+    evaluate,
+    regressions,
+)
+from rockbench.studies.tolerances import METRICS, ToleranceError, load_tolerances
 from rockbench.trajectory import Status
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -90,6 +97,10 @@ def test_tolerance_layers(tmp_path: Path) -> None:
     ("[defaults]\nmax_error = true", "max_error must be a number >= 0"),
     ("[defaults]\nstatus = 'fine'", "unknown status 'fine'"),
     ("[defaults]\nstatus = 3", "status must be one of"),
+    ("[defaults]\nstatus = [['ok']]", "defaults.status must list status names"),
+    ("[defaults]\nstatus = [{ok = 1}]", "defaults.status must list status names"),
+    ("[defaults]\nrealtime_factor = 10", "is measured but is not a limit"),
+    ("[regression]\nmetrics = [['max_error']]", "regression.metrics must be a list"),
     ("format = 2", "format 2 is not supported"),
     ("colour = 'red'", "unknown key 'colour'"),
     ("engines = 3", "engines must be a table"),
@@ -124,11 +135,26 @@ def test_shipped_tolerance_files(suite: str) -> None:
 
 
 # ---------------------------------------------------------------------- verdicts
+def test_tolerance_metrics_are_run_metrics() -> None:
+    assert set(METRICS) <= NUMERIC_METRICS
+
+
+def _metrics(status: Status = Status.OK, message: str = "", **values: object) -> RunMetrics:
+    m: dict[str, object] = dict(
+        status=status, message=message, n_blocks=1, critical_angle=0.17, duration=1.0,
+        peaks=(0.5,), simulated_time=1.0, n_samples=101, wall_time=1.0, cpu_time=None,
+        realtime_factor=1.0, time_to_rest=None, max_wobble=0.0, slide=0.0,
+        reference_status=Status.OK, max_error=0.01, impacts_missing=0,
+        impact_time_error=0.001)
+    m.update(values)
+    if isinstance(m["reference_status"], str):
+        m["reference_status"] = Status(m["reference_status"])
+    return RunMetrics(**m)  # type: ignore[arg-type]
+
+
 def _cell(status: Status = Status.OK, **metrics: object) -> Cell:
-    m = {"reference_status": "ok", "max_error": 0.01, "impacts_missing": 0,
-         "impact_time_error": 0.001, "wall_time": 1.0}
-    m.update(metrics)
-    return Cell("free-b1-0.5", "mujoco", {}, status, "why" if status != Status.OK else "", m)
+    why = "why" if status != Status.OK else ""
+    return Cell("free-b1-0.5", Method("mujoco"), _metrics(status, why, **metrics))
 
 
 def test_evaluate() -> None:
@@ -148,9 +174,24 @@ def test_evaluate() -> None:
     assert evaluate(_cell(Status.UNSTABLE), {"status": ("ok", "unstable")}) == []
 
 
+def test_a_cell_whose_reference_did_not_complete_never_passes() -> None:
+    """Issue 14: a crashed reference cannot vouch for a cell, unless only the status counts."""
+    crashed = dict(reference_status="crashed", max_error=None, impact_time_error=None,
+                   impacts_missing=None,
+                   error_note="no analytic reference (crashed: eta must be in [0, 1])")
+    limits = {"status": "reference", "max_error": 0.05}
+    fails = evaluate(_cell(**crashed), limits)
+    assert len(fails) == 1 and "eta must be in [0, 1]" in fails[0]
+    assert "cannot be checked" in fails[0]
+    assert evaluate(_cell(**crashed), {"status": "completed"}) == []  # status only
+    assert evaluate(_cell(**crashed), {"status": "completed", "max_error": 0.05})
+    # no analytic model at all (e.g. three blocks): the status is checked, as documented
+    assert evaluate(_cell(reference_status=None, max_error=None), limits) == []
+
+
 def test_regressions() -> None:
     reg = {"rel": 0.25, "abs": 0.002, "metrics": ["max_error", "impact_time_error"]}
-    base = {"status": "ok", "metrics": {"max_error": 0.01, "impact_time_error": 0.001}}
+    base = BaselineCell(Status.OK, {}, _metrics(max_error=0.01, impact_time_error=0.001))
     assert regressions(_cell(max_error=0.0145), base, reg) == []  # within 0.01·1.25 + 0.002
     assert regressions(_cell(max_error=0.02), base, reg) == ["max_error 0.01 → 0.02 (+100%)"]
     assert regressions(_cell(Status.CRASHED), base, reg) == ["status ok → crashed"]
@@ -158,16 +199,16 @@ def test_regressions() -> None:
 
 
 def _result() -> MatrixResult:
+    mj, pm = Method("mujoco"), Method("pymunk")
     cells = {
-        ("a", "mujoco"): Cell("a", "mujoco", {}, Status.OK, "", {"max_error": 0.001,
-                                                               "wall_time": 0.5}),
-        ("a", "pymunk"): Cell("a", "pymunk", {}, Status.CRASHED, "boom <&>",
-                              {"wall_time": 0.0}, outcome=FAIL,
+        ("a", "mujoco"): Cell("a", mj, _metrics(max_error=0.001, wall_time=0.5)),
+        ("a", "pymunk"): Cell("a", pm, _metrics(Status.CRASHED, "boom <&>", max_error=None,
+                                                wall_time=0.0), outcome=FAIL,
                               reasons=["status crashed: boom <&> (expected ok)"]),
-        ("b", "mujoco"): Cell("b", "mujoco", {}, Status.OK, "", {"max_error": 0.03,
-                                                               "wall_time": 1.5},
+        ("b", "mujoco"): Cell("b", mj, _metrics(max_error=0.03, wall_time=1.5),
                               outcome=REGRESSION, reasons=["regression: max_error 0.01 → 0.03"]),
-        ("b", "pymunk"): Cell("b", "pymunk", {}, Status.UNSUPPORTED, "no stacks", {},
+        ("b", "pymunk"): Cell("b", pm, _metrics(Status.UNSUPPORTED, "no stacks",
+                                                max_error=None, wall_time=0.0),
                               outcome=SKIP, reasons=["no stacks"]),
     }
     return MatrixResult("smoke", ["a", "b"], ["mujoco", "pymunk"], cells, tolerances="t.toml")
@@ -216,12 +257,37 @@ def test_bad_baseline(tmp_path: Path) -> None:
     path.write_text("{")
     with pytest.raises(BaselineError, match="not JSON"):
         load_baseline(path)
-    path.write_text(json.dumps({"format": 1, "cells": {"x/y": {"status": "great"}}}))
+    path.write_text(json.dumps({"format": 2, "cells": {"x/y": {"status": "great"}}}))
     with pytest.raises(BaselineError, match="cell 'x/y'"):
         load_baseline(path)
     path.write_text("[]")
     with pytest.raises(BaselineError, match="not a rockbench baseline"):
         load_baseline(path)
+    path.write_bytes(b"\xff\xfe{")
+    with pytest.raises(BaselineError, match="not UTF-8"):
+        load_baseline(path)
+    path.write_text(json.dumps({"format": 1, "cells": {}}))
+    with pytest.raises(BaselineError, match="format 1 is not supported"):
+        load_baseline(path)
+
+
+def test_baseline_round_trip_and_typed_fields(tmp_path: Path) -> None:
+    m = _metrics(max_error=0.0123, peaks=(0.5, None), impact_time_errors=(0.001, None))
+    data = baseline_data({"mujoco/a": (Status.OK, {"timestep": 0.001}, m)}, "smoke")
+    path = write_baseline(data, tmp_path / "sub" / "b.json")
+    base = load_baseline(path)
+    assert base.suite == "smoke" and base.source == str(path)
+    assert base.cells["mujoco/a"].metrics == m
+    assert base.cells["mujoco/a"].settings == {"timestep": 0.001}
+    # strings are never coerced into numbers: the file and the field are named
+    good = path.read_text()
+    for field, bad in (("max_error", "0.01"), ("n_samples", 1.5), ("peaks", ["0.5"]),
+                       ("status", "fine"), ("wall_time", True)):
+        doc = json.loads(good)
+        doc["cells"]["mujoco/a"]["metrics"][field] = bad
+        path.write_text(json.dumps(doc))
+        with pytest.raises(BaselineError, match=f"b.json: cell 'mujoco/a': metrics.{field}"):
+            load_baseline(path)
 
 
 # ---------------------------------------------------------------------- the command
@@ -271,17 +337,27 @@ def test_matrix_command_exit_codes(tmp_path: Path, tiny_suite: str,
     (["--set", "fault.nosuch=1"], "nosuch"),
     (["--jobs", "0"], "--jobs must be >= 1"),
     (["--scheduler", "tcp://localhost:1"], "--scheduler needs --executor dask"),
+    (["--timeout", "0"], "--timeout must be a finite number of seconds > 0"),
+    (["--timeout", "nan"], "--timeout must be a finite number of seconds > 0"),
+    (["--timeout", "inf"], "--timeout must be a finite number of seconds > 0"),
+    (["--junit", "{tmp}/regular-file/junit.xml"], "--junit"),
+    (["--write-baseline", "/proc/rockbench-no/base.json"], "--write-baseline"),
+    (["--write-baseline", "{tmp}"], "is a directory"),
 ])
 def test_matrix_bad_input_exits_2(tmp_path: Path, tiny_suite: str,
                                   capsys: pytest.CaptureFixture[str], extra: list[str],
                                   words: str) -> None:
     tol = tmp_path / "tol.toml"
     tol.write_text("[defaults]\nmax_error = 0.05\n")
+    (tmp_path / "regular-file").write_text("not a folder")
+    extra = [x.replace("{tmp}", str(tmp_path)) for x in extra]
     args = ["matrix", "--suite", tiny_suite, "--engine", "fault", "--tolerances", str(tol),
             "--db", str(tmp_path / "x.db"), *extra]
     assert main(args) == 2
     err = capsys.readouterr().err
     assert words in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "x.db").exists()  # refused before anything ran
+    assert (tmp_path / "regular-file").read_text() == "not a folder"
 
 
 def test_matrix_unknown_suite_exits_2(capsys: pytest.CaptureFixture[str]) -> None:

@@ -13,7 +13,16 @@ import pytest
 from rockbench.bounds import SpeedBound, check_trajectory
 from rockbench.engines import SettingsError, register, unregister
 from rockbench.errors import RockbenchError
-from rockbench.runner import Job, default_jobs, run_job, run_job_subprocess, run_jobs
+from rockbench.runner import (
+    ExecutionError,
+    ExecutionOptions,
+    Job,
+    default_jobs,
+    map_tasks,
+    run_job,
+    run_job_subprocess,
+    run_jobs,
+)
 from rockbench.scenarios import Block, Free, Scenario, SinePulse
 from rockbench.trajectory import Status, Trajectory
 
@@ -49,7 +58,7 @@ def test_every_fault_becomes_a_status_and_the_parent_carries_on() -> None:
     jobs = [Job(SCENARIO, "fault", {"fault": f}) for f in EXPECTED]
     seen: list[str] = []
     start = time.perf_counter()
-    trajs = run_jobs(jobs, n_jobs=2, timeout=2.0,
+    trajs = run_jobs(jobs, ExecutionOptions(jobs=2, timeout=2.0),
                      on_result=lambda job, traj: seen.append(job.settings["fault"]))
     assert time.perf_counter() - start < 20
     assert sorted(seen) == sorted(EXPECTED)  # reported as each finished
@@ -62,29 +71,67 @@ def test_every_fault_becomes_a_status_and_the_parent_carries_on() -> None:
 
 
 def test_unstable_trajectories_keep_samples_up_to_the_fault() -> None:
-    traj = run_jobs([Job(SCENARIO, "fault", {"fault": "nan", "at": 0.1})], timeout=10)[0]
+    traj = run_jobs([Job(SCENARIO, "fault", {"fault": "nan", "at": 0.1})],
+                    ExecutionOptions(timeout=10))[0]
     assert traj.status is Status.UNSTABLE
     assert 0.09 < traj.t[-1] < 0.13
 
 
 def test_bad_settings_are_bad_input_not_a_crash() -> None:
     with pytest.raises(SettingsError):
-        run_jobs([Job(SCENARIO, "fault", {"fault": "bogus"})], timeout=10)
+        run_jobs([Job(SCENARIO, "fault", {"fault": "bogus"})], ExecutionOptions(timeout=10))
     with pytest.raises(SettingsError):
         run_job(Job(SCENARIO, "fault", {"no_such_knob": 1}))
 
 
 def test_unknown_engine_crosses_the_process_boundary() -> None:
     with pytest.raises(RockbenchError, match="unknown engine"):
-        run_jobs([Job(SCENARIO, "nosuchengine")], timeout=10)
+        run_jobs([Job(SCENARIO, "nosuchengine")], ExecutionOptions(timeout=10))
 
 
 def test_in_process_run_and_default_jobs() -> None:
-    traj = run_jobs([Job(SCENARIO, "fault")], isolate=False)[0]
+    traj = run_jobs([Job(SCENARIO, "fault")], ExecutionOptions(isolate=False))[0]
     assert traj.status is Status.OK and traj.t.size == 61
     assert default_jobs() >= 1
     with pytest.raises(RockbenchError, match="executor"):
-        run_jobs([Job(SCENARIO, "fault")], executor="threads")
+        run_jobs([Job(SCENARIO, "fault")], ExecutionOptions(executor="threads"))
+
+
+@pytest.mark.parametrize("kw, words", [
+    ({"jobs": 0}, "jobs must be >= 1"),
+    ({"jobs": 1.5}, "jobs must be >= 1"),
+    ({"jobs": True}, "jobs must be >= 1"),
+    ({"timeout": 0}, "timeout must be a finite number of seconds > 0"),
+    ({"timeout": -1.0}, "timeout must be a finite number of seconds > 0"),
+    ({"timeout": float("nan")}, "timeout must be a finite number of seconds > 0"),
+    ({"timeout": float("inf")}, "timeout must be a finite number of seconds > 0"),
+    ({"timeout": "10"}, "timeout must be a finite number of seconds > 0"),
+    ({"executor": "threads"}, "executor must be one of process, dask"),
+    ({"scheduler": "tcp://x:1"}, "scheduler needs executor dask"),
+])
+def test_execution_options_are_validated_once(kw: dict, words: str) -> None:
+    with pytest.raises(ExecutionError, match=words):
+        ExecutionOptions(**kw)
+
+
+def _square(x: int) -> int:
+    if x < 0:
+        time.sleep(30)  # a task that hangs
+    return x * x
+
+
+def test_map_tasks_dispatches_any_function_locally() -> None:
+    seen: list[int] = []
+    local = map_tasks(_square, [3, 1, 2], ExecutionOptions(jobs=2),
+                      on_done=lambda i, v: seen.append(v))
+    here = map_tasks(_square, [3, 1, 2], ExecutionOptions(isolate=False))
+    assert local == here == [9, 1, 4] and sorted(seen) == [1, 4, 9]
+    faults: list[str] = []
+    out = map_tasks(_square, [2, -1], ExecutionOptions(jobs=2, timeout=1.0),
+                    on_fault=lambda i, f: faults.append(f.kind) or -1)
+    assert out == [4, -1] and faults == ["timeout"]
+    with pytest.raises(RockbenchError, match="task 2 of 2 failed: killed after the 1 s limit"):
+        map_tasks(_square, [2, -1], ExecutionOptions(jobs=2, timeout=1.0))
 
 
 def test_subprocess_isolation_ships_runtime_registrations() -> None:
@@ -146,14 +193,17 @@ def test_dask_local_cluster_runs_the_same_isolated_jobs() -> None:
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
         seen = []
-        trajs = run_jobs(jobs, executor="dask", scheduler=client,
-                         timeout=lambda job: 3.0 if job.settings["fault"] == "hang" else 60.0,
+        trajs = run_jobs(jobs, ExecutionOptions(executor="dask", scheduler=client),
+                         timeout_of=lambda job: 3.0 if job.settings["fault"] == "hang" else 60.0,
                          on_result=lambda j, t: seen.append(j.settings["fault"]))
         # the address form, as given by --scheduler
-        again = run_jobs(jobs[:1], executor="dask", scheduler=cluster.scheduler_address,
-                         timeout=20.0)
+        again = run_jobs(jobs[:1], ExecutionOptions(executor="dask", timeout=20.0,
+                                                    scheduler=cluster.scheduler_address))
+        squares = map_tasks(_square, [1, 2, 3], ExecutionOptions(executor="dask",
+                                                                 scheduler=client))
     assert [t.status for t in trajs] == [Status.OK, Status.CRASHED, Status.CRASHED,
                                         Status.TIMEOUT]
     assert "SIGSEGV" in trajs[2].message
     assert sorted(seen) == sorted(j.settings["fault"] for j in jobs)
     assert again[0].status is Status.OK
+    assert squares == [1, 4, 9]

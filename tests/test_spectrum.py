@@ -31,14 +31,7 @@ from rockbench.analytic.overturning import (
 )
 from rockbench.cli import main
 from rockbench.errors import ScenarioError
-from rockbench.report.spectrum import (
-    FAILED,
-    analytic_map,
-    classify_trajectory,
-    grid_axes,
-    parse_block,
-    parse_grid,
-)
+from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import (
     Block,
     CosinePulse,
@@ -47,6 +40,14 @@ from rockbench.scenarios import (
     load_scenario,
     save_scenario,
     scenario_from_dict,
+)
+from rockbench.studies.spectrum import (
+    FAILED,
+    analytic_map,
+    classify_trajectory,
+    grid_axes,
+    parse_block,
+    parse_grid,
 )
 from rockbench.trajectory import Status, Trajectory
 
@@ -383,8 +384,8 @@ def test_classify_engine_trajectories():
 def test_analytic_map_in_parallel_equals_serial():
     spec = parse_block("1x5")
     w, a = grid_axes(4, 7, (0.5, 6.0), (0.0, 8.0))
-    m1 = analytic_map(spec, "cosine", w, a, n_jobs=1, tol=1e-2)
-    m2 = analytic_map(spec, "cosine", w, a, n_jobs=2, tol=1e-2)
+    m1 = analytic_map(spec, "cosine", w, a, tol=1e-2, execution=ExecutionOptions(isolate=False))
+    m2 = analytic_map(spec, "cosine", w, a, tol=1e-2, execution=ExecutionOptions(jobs=2))
     assert np.array_equal(m1.codes, m2.codes)
     np.testing.assert_allclose(m1.first_boundary(), m2.first_boundary())
     assert np.all(m1.codes[:, 0] == NO_UPLIFT)
@@ -422,8 +423,11 @@ def test_spectrum_command_bad_input(capsys):
     assert main(["spectrum", "--block", "nonsense-block", "--grid", "3x3"]) == 2
     assert main(["spectrum", "--grid", "3"]) == 2
     assert main(["spectrum", "--freq", "5:1", "--grid", "3x3"]) == 2
+    assert main(["spectrum", "--refine", "-3", "--grid", "3x3"]) == 2
+    assert main(["spectrum", "--timeout", "0", "--grid", "3x3"]) == 2
     err = capsys.readouterr().err
-    assert err.count("rockbench: error:") == 3
+    assert err.count("rockbench: error:") == 5
+    assert "--refine must be >= 0" in err and "--timeout must be" in err
 
 
 def test_pulse_excitation_kinds():

@@ -13,10 +13,14 @@ import pytest
 import rockbench
 from rockbench.cli import main
 from rockbench.engines import register, unregister
-from rockbench.report.matrix import run_matrix
-from rockbench.report.tolerances import Tolerances
+from rockbench.evaluation import evaluate_run
+from rockbench.method import Method
+from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Block, Scenario, SinePulse, save_scenario
 from rockbench.store import Store, StoreError, jsonable, scenario_hash, settings_key
+from rockbench.studies.matrix import run_matrix
+from rockbench.studies.recording import finish_run
+from rockbench.studies.tolerances import Tolerances
 from rockbench.trajectory import Status, Trajectory
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -58,28 +62,40 @@ def test_hashes() -> None:
 
 def test_record_find_and_runs(tmp_path: Path) -> None:
     db = tmp_path / "sub" / "r.db"
+    fine, coarse = Method.of("fault", {"timestep": 0.001}), Method.of("fault", {"timestep": 0.002})
+    ok = evaluate_run(TINY[0], _traj(), None)
     with Store(db, session="s1") as store:
-        rid = store.record(TINY[0], "fault", {"timestep": 0.001}, _traj(),
-                           {"max_error": 0.01, "peak_ratio": [np.float64(0.5)],
-                            "bad": float("nan")}, kind="matrix", suite="smoke")
-        store.record(TINY[0], "fault", {"timestep": 0.002}, _traj(Status.CRASHED), {},
+        rid = store.record(TINY[0], fine, _traj(), ok, kind="matrix", suite="smoke")
+        crashed = _traj(Status.CRASHED)
+        store.record(TINY[0], coarse, crashed, evaluate_run(TINY[0], crashed, None),
                      kind="sweep")
         assert rid == 1 and len(store) == 2
     with Store(db) as store:  # reopened: everything is there
-        rec = store.find(TINY[0], "fault", {"timestep": 0.001})
+        rec = store.find(TINY[0], fine)
         assert rec is not None
-        assert rec.metrics == {"max_error": 0.01, "peak_ratio": [0.5], "bad": None}
+        assert rec.metrics == ok  # the typed metrics come back as they went in
+        assert rec.metrics.peaks == pytest.approx((np.sin(0.4) / TINY[0].critical_angle,))
         assert rec.status is Status.OK and rec.suite == "smoke" and rec.session == "s1"
         assert rec.engine_version == "0.0-test"
         assert rec.rockbench_version == rockbench.__version__
         assert rec.effective_settings == {"timestep": 0.001}
         assert rec.machine and rec.timestamp.endswith("+00:00")
-        assert store.find(TINY[0], "fault", {"timestep": 0.001},
-                          engine_version="other") is None
-        assert store.find(TINY[1], "fault", {"timestep": 0.001}) is None
+        assert store.find(TINY[0], fine, engine_version="other") is None
+        assert store.find(TINY[1], fine) is None
         assert [r.kind for r in store.runs(scenario="tiny-0")] == ["matrix", "sweep"]
         assert [r.status for r in store.runs(kind="sweep")] == [Status.CRASHED]
 
+
+def test_finish_run_records_the_identity_of_the_run(tmp_path: Path) -> None:
+    ref = fault_engine.reference(TINY[0])
+    method = Method.of("fault", {"follow": True})
+    with Store(tmp_path / "r.db") as store:
+        m = finish_run(store, TINY[0], method, ref, ref, kind="compare")
+        (rec,) = store.runs()
+    assert m.max_error == 0.0 and m.reference_status is Status.OK  # a run equal to its ref
+    assert rec.kind == "compare" and rec.metrics == m and rec.method == "fault"
+    assert m.scenario_hash == scenario_hash(TINY[0]) and m.settings_hash
+    assert finish_run(None, TINY[0], method, ref, ref, kind="compare") == m  # no store
 
 def test_reference_cache_round_trip(tmp_path: Path) -> None:
     with Store(tmp_path / "r.db") as store:
@@ -96,8 +112,83 @@ def test_reference_cache_round_trip(tmp_path: Path) -> None:
 def test_not_a_database(tmp_path: Path) -> None:
     bad = tmp_path / "bad.db"
     bad.write_text("this is not sqlite " * 100)
-    with pytest.raises(StoreError, match="not a usable results database"):
+    before = bad.read_bytes()
+    with pytest.raises(StoreError, match="not a rockbench results store"):
         Store(bad)
+    with pytest.raises(StoreError, match="not a rockbench results store"):
+        Store(bad, create=False)
+    assert bad.read_bytes() == before  # refused, never modified
+
+
+def test_a_foreign_sqlite_file_is_refused_and_left_alone(tmp_path: Path) -> None:
+    other = tmp_path / "other.db"
+    with sqlite3.connect(other) as con:
+        con.execute("CREATE TABLE customers (name TEXT)")
+        con.execute("INSERT INTO customers VALUES ('Ada')")
+    con.close()
+    before = other.read_bytes()
+    for create in (True, False):
+        with pytest.raises(StoreError, match="another application"):
+            Store(other, create=create)
+    assert other.read_bytes() == before
+    assert not Path(f"{other}-wal").exists()
+
+
+def test_a_schema_1_store_is_upgraded_in_place(tmp_path: Path) -> None:
+    db = tmp_path / "old.db"
+    with sqlite3.connect(db) as con:
+        con.executescript(SCHEMA_1)
+        con.execute("INSERT INTO meta VALUES ('schema', '1')")
+        con.execute(
+            "INSERT INTO runs (session, kind, suite, scenario, scenario_hash, engine, "
+            "engine_version, settings, settings_key, effective_settings, status, message, "
+            "metrics, wall_time, machine, timestamp, rockbench_version) VALUES "
+            "('s', 'matrix', '', 'tiny-0', ?, 'fault', '0.0-test', '{}', ?, '{}', 'ok', '', "
+            "'{\"max_error\": 0.01}', 0.5, 'm', '2026-11-01T00:00:00+00:00', '0.1.0')",
+            (scenario_hash(TINY[0]), settings_key({})))
+    con.close()
+    with Store(db) as store:
+        (old,) = store.runs()
+        assert old.status is Status.OK and old.metrics is None  # schema-1 metrics: a dict
+        assert old.method == "fault" and old.cpu_time is None
+        m = evaluate_run(TINY[0], _traj(), None)
+        store.record(TINY[0], Method("fault"), _traj(), m, kind="matrix")
+        assert store.find(TINY[0], Method("fault")).metrics == m
+    with sqlite3.connect(db) as con:
+        assert con.execute("SELECT value FROM meta WHERE key='schema'").fetchone()[0] == "2"
+        assert con.execute("PRAGMA application_id").fetchone()[0] != 0
+    con.close()
+
+
+def test_history_refuses_empty_and_foreign_files(tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    empty = tmp_path / "empty.db"
+    empty.touch()
+    assert main(["history", "--db", str(empty)]) == 2
+    err = capsys.readouterr().err
+    assert "empty file" in err and len(err.strip().splitlines()) == 1
+    assert empty.read_bytes() == b""  # not turned into a rockbench store
+    other = tmp_path / "other.db"
+    with sqlite3.connect(other) as con:
+        con.execute("CREATE TABLE t (x)")
+    con.close()
+    before = other.read_bytes()
+    assert main(["history", "--db", str(other)]) == 2
+    assert "another application" in capsys.readouterr().err
+    assert other.read_bytes() == before
+
+
+SCHEMA_1 = """
+CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT);
+CREATE TABLE runs (
+    id INTEGER PRIMARY KEY AUTOINCREMENT, session TEXT NOT NULL, kind TEXT NOT NULL,
+    suite TEXT NOT NULL DEFAULT '', scenario TEXT NOT NULL, scenario_hash TEXT NOT NULL,
+    engine TEXT NOT NULL, engine_version TEXT NOT NULL, settings TEXT NOT NULL,
+    settings_key TEXT NOT NULL, effective_settings TEXT NOT NULL, status TEXT NOT NULL,
+    message TEXT NOT NULL, metrics TEXT NOT NULL, wall_time REAL, machine TEXT NOT NULL,
+    timestamp TEXT NOT NULL, rockbench_version TEXT NOT NULL
+);
+"""
 
 
 def test_resume_after_an_interrupted_matrix(tmp_path: Path) -> None:
@@ -112,13 +203,14 @@ def test_resume_after_an_interrupted_matrix(tmp_path: Path) -> None:
 
     with Store(db) as store, pytest.raises(KeyboardInterrupt):
         run_matrix(TINY, ["fault"], tol, settings={"fault": {"follow": True}}, store=store,
-                   n_jobs=1, timeout=30, on_cell=interrupt)
+                   execution=ExecutionOptions(jobs=1, timeout=30), on_cell=interrupt)
     with Store(db) as store:
         assert len(store) == 2  # nothing finished was lost
         assert len(store.runs(kind="matrix")) == 2
         reused: list[bool] = []
         result = run_matrix(TINY, ["fault"], tol, settings={"fault": {"follow": True}},
-                            store=store, resume=True, n_jobs=2, timeout=30,
+                            store=store, resume=True,
+                            execution=ExecutionOptions(jobs=2, timeout=30),
                             on_cell=lambda c: reused.append(c.reused))
         assert sorted(reused) == [False, True, True]
         assert result.exit_code == 0 and len(result.cells) == 3
@@ -126,7 +218,7 @@ def test_resume_after_an_interrupted_matrix(tmp_path: Path) -> None:
         # other settings are another cell: not reused
         run_matrix(TINY[:1], ["fault"], tol, settings={"fault": {"follow": True,
                                                                  "iterations": 20}},
-                   store=store, resume=True, n_jobs=1, timeout=30)
+                   store=store, resume=True, execution=ExecutionOptions(jobs=1, timeout=30))
         assert len(store) == 4
 
 
@@ -151,3 +243,14 @@ def test_resume_and_history_through_the_cli(tmp_path: Path,
     out = capsys.readouterr().out
     assert "tiny-1 on fault" in out and "max_error" in out
     assert main(["history", "--db", str(tmp_path / "missing.db")]) == 2
+    # runs of any study show, compare included
+    with Store(db) as store:
+        sc = TINY[0]
+        ref = fault_engine.reference(sc)
+        finish_run(store, sc, Method.of("fault", {"follow": True}), ref, ref, kind="compare")
+    capsys.readouterr()
+    assert main(["history", "tiny-0", "--db", db, "--kind", "compare"]) == 0
+    out = capsys.readouterr().out
+    assert "tiny-0 on fault: 1 run(s)" in out and "compare" in out
+    assert main(["history", "--db", db]) == 0
+    assert "compare,matrix" in capsys.readouterr().out

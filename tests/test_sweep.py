@@ -14,20 +14,22 @@ import pytest
 from rockbench.cli import main
 from rockbench.engines import SettingsError, register, unregister
 from rockbench.presets import layered_settings, load_settings_file, write_settings_file
-from rockbench.report.sweep import (
+from rockbench.report.sweep_figures import pareto_plot, stability_map
+from rockbench.report.sweep_tables import write_table
+from rockbench.runner import ExecutionOptions
+from rockbench.scenarios import Block, Scenario, SinePulse, save_scenario
+from rockbench.studies.pareto import pareto_front
+from rockbench.studies.sweep import (
     SweepError,
     cheapest,
-    pareto_front,
-    pareto_plot,
+    efficient_points,
     parse_grid,
     run_sweep,
-    stability_map,
-    tunable_knobs,
-    tune,
-    write_table,
 )
-from rockbench.scenarios import Block, Scenario, SinePulse, save_scenario
+from rockbench.studies.tune import tunable_knobs, tune
 from rockbench.trajectory import Status
+
+EXEC = ExecutionOptions(jobs=2, timeout=30)
 
 sys.path.insert(0, str(Path(__file__).parent))
 fault_engine = importlib.import_module("fault_engine")
@@ -68,14 +70,14 @@ def test_parse_grid() -> None:
 def test_small_sweep_table_and_images(tmp_path: Path) -> None:
     grid = parse_grid(["fault.timestep=0.01,0.005,0.0025", "fault.iterations=1,4,16"],
                       ["fault"])
-    result = run_sweep(SCENARIO, grid, base={"fault": BASE}, n_jobs=2, timeout=30)
+    result = run_sweep(SCENARIO, grid, base={"fault": BASE}, execution=EXEC)
     assert len(result.points) == 9
     by = {(p.knobs["timestep"], p.knobs["iterations"]): p for p in result.points}
     assert by[(0.01, 4)].status is Status.UNSTABLE  # beyond the stability limit
     assert by[(0.005, 1)].status is Status.CRASHED
     ok = by[(0.0025, 16)]
     assert ok.status is Status.OK and ok.kind() == "ok" and not ok.drift
-    peak = max(abs(p) for p in ok.metrics["peak_ratio"])
+    peak = max(abs(p) for p in ok.metrics.peaks)
     assert ok.error() == pytest.approx(10 * 0.0025 / 16 * peak, rel=0.05)
     assert by[(0.005, 4)].error() > ok.error()
     # the cheapest point meeting the target and the Pareto front
@@ -83,16 +85,23 @@ def test_small_sweep_table_and_images(tmp_path: Path) -> None:
     best = cheapest(result.points, target)
     assert best is not None and best.meets(target)
     assert all(p.cost >= best.cost for p in result.points if p.meets(target))
-    front = pareto_front(result.points)
+    front = efficient_points(result.points)
     assert front and all(a.cost <= b.cost and a.error() > b.error()
                          for a, b in zip(front, front[1:], strict=False))
+    assert all(p.kind() == "ok" for p in front)
+    # no point off the front beats a front point in both cost and error
+    assert not any(q.cost <= p.cost and q.error() < p.error()
+                   for p in front for q in result.points if q.kind() == "ok")
+    # the cost is the CPU time of the run where it was measured
+    assert all(p.cost == p.metrics.cpu_time for p in result.points
+               if p.metrics.cpu_time)
     # table
     table = write_table(result, tmp_path / "sweep.csv")
     rows = list(csv.DictReader(table.open()))
     assert len(rows) == 9
     assert {r["status"] for r in rows} == {"ok", "unstable", "crashed"}
-    assert {"engine", "timestep", "iterations", "max_error", "wall_time", "drift",
-            "message"} <= set(rows[0])
+    assert {"engine", "timestep", "iterations", "max_error", "cost", "wall_time", "cpu_time",
+            "drift", "message"} <= set(rows[0])
     # images
     smap = stability_map(result, "fault", tmp_path / "stab.png", target)
     pplot = pareto_plot(result, tmp_path / "pareto.png", target)
@@ -100,6 +109,12 @@ def test_small_sweep_table_and_images(tmp_path: Path) -> None:
         img = mpimg.imread(png)
         assert img.shape[0] > 300 and img.shape[1] > 400
         assert img[..., :3].std() > 0.05  # not blank
+
+
+def test_pareto_front() -> None:
+    pts = [(1.0, 1.0), (2.0, 0.5), (3.0, 0.7), (0.5, 2.0), (float("nan"), 0.1), (2.0, 0.5)]
+    front = pareto_front(range(len(pts)), cost=lambda i: pts[i][0], error=lambda i: pts[i][1])
+    assert front == [3, 0, 1]  # cheapest first; the NaN and the duplicate take no part
 
 
 def test_sweep_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -144,8 +159,7 @@ def test_settings_files(tmp_path: Path) -> None:
 def test_tune_finds_the_cheapest_settings_and_writes_a_preset(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert tunable_knobs("fault") == {"timestep": "smaller", "iterations": "larger"}
-    res = tune(SCENARIO, "fault", 0.01, base={"follow": True}, budget=12, n_jobs=2,
-               timeout=30)
+    res = tune(SCENARIO, "fault", 0.01, base={"follow": True}, budget=12, execution=EXEC)
     assert res.best is not None and res.best.meets(0.01)
     assert len(res.evaluated) <= 12
     assert not math.isnan(res.best.cost)

@@ -12,15 +12,13 @@ import importlib
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, NoReturn
-
-import numpy as np
+from typing import NoReturn
 
 import rockbench
+from rockbench.cli.common import Progress, add_engine_arguments, engine_settings, execution_options
 from rockbench.errors import RockbenchError
 
-__all__ = ["main", "build_parser", "add_engine_arguments", "add_settings_arguments",
-           "engine_settings", "Progress"]
+__all__ = ["main", "build_parser", "COMMANDS"]
 
 #: Sub-commands: name → (module, one-line help). Modules are imported on use.
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -42,77 +40,6 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
-
-
-def add_engine_arguments(p: argparse.ArgumentParser, default: str = "all") -> None:
-    """The engine selection and settings flags shared by every command that runs engines."""
-    p.add_argument("--engine", "-e", default=default, metavar="NAMES",
-                   help=f"'all' or a comma list of engines (default: {default})")
-    add_settings_arguments(p)
-
-
-def add_settings_arguments(p: argparse.ArgumentParser) -> None:
-    """``--preset``, ``--settings FILE`` and ``--set``: the layers of :func:`engine_settings`."""
-    p.add_argument("--preset", default=None, metavar="NAME",
-                   help="settings preset for every engine (e.g. accurate, fast)")
-    p.add_argument("--settings", dest="settings_file", default=None, metavar="FILE",
-                   help="TOML file of engine knobs ([engine] knob = value), e.g. written by "
-                        "`rockbench tune`; it overrides --preset, and --set overrides it")
-    p.add_argument("--set", dest="set_options", action="append", default=[],
-                   metavar="ENGINE.KNOB=VALUE",
-                   help="override an engine knob, e.g. --set bullet.substeps=20 (repeatable)")
-
-
-def engine_settings(args: argparse.Namespace, engines: Sequence[str]) -> dict[str, dict[str, Any]]:
-    """Per-engine settings from ``--preset``, ``--settings FILE`` and ``--set``, validated now.
-
-    See :func:`rockbench.presets.layered_settings` (values typed, later layers win).
-
-    Raises
-    ------
-    SettingsError
-        Bad settings file, unknown knob or preset, or a value of the wrong type.
-    UnknownEngine
-        ``--set`` names an engine that is not selected or does not exist.
-    """
-    from rockbench.presets import layered_settings
-
-    return layered_settings(engines, preset=args.preset, settings_file=args.settings_file,
-                            set_options=args.set_options)
-
-
-class Progress:
-    """A progress bar on a terminal (rich), a plain line per finished job otherwise."""
-
-    def __init__(self, total: int, description: str, *, quiet: bool = False) -> None:
-        self.total = total
-        self.description = description
-        self.done = 0
-        self.quiet = quiet
-        self._bar = None
-        if not quiet and sys.stderr.isatty():
-            from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
-            from rich.progress import Progress as RichProgress
-
-            self._bar = RichProgress(TextColumn("{task.description}"), BarColumn(),
-                                     MofNCompleteColumn(), TimeElapsedColumn(),
-                                     transient=True)
-
-    def __enter__(self) -> Progress:
-        if self._bar is not None:
-            self._bar.start()
-            self._task = self._bar.add_task(self.description, total=self.total)
-        return self
-
-    def advance(self, text: str = "") -> None:
-        """Count one finished job (``text`` describes it)."""
-        self.done += 1
-        if self._bar is not None:
-            self._bar.update(self._task, advance=1, description=f"{self.description} {text}")
-
-    def __exit__(self, *exc: object) -> None:
-        if self._bar is not None:
-            self._bar.stop()
 
 
 # ---------------------------------------------------------------------- engines
@@ -190,8 +117,10 @@ def _configure_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", "-o", default=None, metavar="FILE",
                    help="write trajectories (.csv or .npz, + .json sidecar); with several "
                         "engines the engine name is appended to the file stem")
-    p.add_argument("--timeout", type=float, default=None, metavar="S",
-                   help="wall-time limit per engine run (default: none)")
+    from rockbench.runner import DEFAULT_TIMEOUT
+
+    p.add_argument("--timeout", type=float, default=DEFAULT_TIMEOUT, metavar="S",
+                   help=f"wall-time limit per engine run in s (default: {DEFAULT_TIMEOUT:g})")
     p.add_argument("--no-isolate", action="store_true",
                    help="run engines in this process (no crash/hang protection)")
 
@@ -207,11 +136,13 @@ def _execute_run(args: argparse.Namespace) -> int:
     from rich.console import Console
     from rich.table import Table
 
-    from rockbench import analytic, metrics
+    from rockbench import analytic
     from rockbench.engines import resolve_engine_names
+    from rockbench.evaluation import evaluate_run
     from rockbench.runner import Job, run_jobs
     from rockbench.scenarios import get_scenario, scenario_to_dict
 
+    execution = execution_options(args, isolate=not args.no_isolate)
     scenario = get_scenario(args.scenario)
     engines = resolve_engine_names(args.engine)
     settings = engine_settings(args, engines)
@@ -238,8 +169,7 @@ def _execute_run(args: argparse.Namespace) -> int:
             save(job, traj)
             bar.advance(job.engine)
 
-        trajs = run_jobs(jobs, n_jobs=1, timeout=args.timeout, isolate=not args.no_isolate,
-                         on_result=on_result)
+        trajs = run_jobs(jobs, execution, on_result=on_result)
     by_engine = dict(zip(engines_run, trajs, strict=True))
     ref = by_engine.get("analytic") if has_ref else None
     lam = scenario.critical_angle
@@ -256,19 +186,17 @@ def _execute_run(args: argparse.Namespace) -> int:
             label = "analytic (reference)"
         else:
             label = name
-        peaks = metrics.peak_ratio(traj, lam)
-        err = (metrics.max_error(traj, ref, lam)
-               if ref is not None and traj is not ref and traj.t.size and ref.t.size else np.nan)
-        table.add_row(label, str(traj.status), *[_fmt(p) for p in peaks], _fmt(err),
-                      f"{traj.wall_time:.3f}", traj.message)
+        m = evaluate_run(scenario, traj, ref, is_reference=traj is ref)
+        table.add_row(label, str(traj.status), *[_fmt(p) for p in m.peaks],
+                      _fmt(m.max_error), f"{m.wall_time:.3f}", traj.message)
     Console(width=140).print(table)
     for w in written:
         print(f"wrote {w}")
     return 0
 
 
-def _fmt(x: float) -> str:
-    return "-" if not np.isfinite(x) else f"{x:.4f}"
+def _fmt(x: float | None) -> str:
+    return "-" if x is None else f"{x:.4f}"
 
 
 # ---------------------------------------------------------------------- main

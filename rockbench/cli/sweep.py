@@ -8,15 +8,22 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from rockbench.cli import Progress, add_engine_arguments, add_settings_arguments, engine_settings
+from rockbench.cli.common import (
+    Progress,
+    add_engine_arguments,
+    add_run_arguments,
+    add_settings_arguments,
+    engine_settings,
+    execution_options,
+    open_store,
+)
 from rockbench.errors import RockbenchError
-from rockbench.report.matrix_command import add_run_arguments, check_parallel_arguments, open_store
 
 __all__ = ["configure_sweep", "execute_sweep", "configure_tune", "execute_tune"]
 
 
 def _metric_arguments(p: argparse.ArgumentParser) -> None:
-    from rockbench.report.sweep import ERROR_METRICS
+    from rockbench.studies.sweep import ERROR_METRICS
 
     p.add_argument("--metric", choices=ERROR_METRICS, default="max_error",
                    help="error measure against the analytic reference (default: max_error, "
@@ -63,18 +70,12 @@ def configure_sweep(p: argparse.ArgumentParser) -> None:
 def execute_sweep(args: argparse.Namespace) -> int:
     """Run ``rockbench sweep``: the grid, its table, stability maps and the Pareto plot."""
     from rockbench.engines import resolve_engine_names
-    from rockbench.report.sweep import (
-        cheapest,
-        format_table,
-        pareto_plot,
-        parse_grid,
-        run_sweep,
-        stability_map,
-        write_table,
-    )
+    from rockbench.report.sweep_figures import pareto_plot, stability_map
+    from rockbench.report.sweep_tables import format_table, write_table
     from rockbench.scenarios import get_scenario
+    from rockbench.studies.sweep import cheapest, parse_grid, run_sweep
 
-    check_parallel_arguments(args)
+    execution = execution_options(args)
     if args.target is not None and not args.target > 0:
         raise RockbenchError(f"--target must be > 0, got {args.target:g}")
     scenario = get_scenario(args.scenario)
@@ -87,8 +88,7 @@ def execute_sweep(args: argparse.Namespace) -> int:
     try:
         with Progress(n, f"sweep {scenario.name}") as bar:
             result = run_sweep(scenario, grid, base=base, metric=args.metric, store=store,
-                               resume=args.resume, n_jobs=args.jobs, timeout=args.timeout,
-                               executor=args.executor, scheduler=args.scheduler,
+                               resume=args.resume, execution=execution,
                                on_point=lambda p: _progress_line(
                                    bar, f"{p.engine} {_knob_text(p.knobs)}: {p.status.value}"))
     finally:
@@ -143,10 +143,10 @@ def execute_tune(args: argparse.Namespace) -> int:
     """Run ``rockbench tune``; writes the settings file when the target is reached."""
     from rockbench.engines import resolve_engine_names
     from rockbench.presets import write_settings_file
-    from rockbench.report.sweep import tune
     from rockbench.scenarios import get_scenario
+    from rockbench.studies.tune import tune
 
-    check_parallel_arguments(args)
+    execution = execution_options(args)
     if not args.target > 0:
         raise RockbenchError(f"--target must be > 0, got {args.target:g}")
     if args.budget < 1:
@@ -161,9 +161,8 @@ def execute_tune(args: argparse.Namespace) -> int:
     try:
         with Progress(args.budget, f"tune {engine}") as bar:
             res = tune(scenario, engine, args.target, knobs=args.knob, base=base,
-                       metric=args.metric, budget=args.budget, store=store, n_jobs=args.jobs,
-                       timeout=args.timeout, executor=args.executor, scheduler=args.scheduler,
-                       on_point=lambda p: _progress_line(
+                       metric=args.metric, budget=args.budget, store=store,
+                       execution=execution, on_point=lambda p: _progress_line(
                            bar, f"{_knob_text(p.knobs)}: {p.status.value} "
                                 f"{args.metric}={p.error(args.metric):.3g}"))
     finally:

@@ -14,13 +14,17 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from rockbench.cli import Progress, add_engine_arguments, engine_settings
+from rockbench.cli.common import (
+    Progress,
+    add_engine_arguments,
+    add_parallel_arguments,
+    engine_settings,
+    execution_options,
+)
 from rockbench.errors import RockbenchError
-from rockbench.report.matrix_command import add_parallel_arguments, check_parallel_arguments
 
 __all__ = ["configure", "execute"]
 
@@ -73,15 +77,18 @@ def execute(args: argparse.Namespace) -> int:
     from rich.table import Table
 
     from rockbench.engines import resolve_engine_names
-    from rockbench.report import spectrum as sp
+    from rockbench.report import spectrum_figures as fig
+    from rockbench.studies import spectrum as sp
 
-    check_parallel_arguments(args)
+    execution = execution_options(args)
     if not (args.tol > 0 and math.isfinite(args.tol)):
         raise RockbenchError(f"--tol must be > 0, got {args.tol}")
     if args.eta is not None and not 0.0 <= args.eta <= 1.0:
         raise RockbenchError(f"--eta must be in [0, 1], got {args.eta}")
-    if not args.settle > 0:
-        raise RockbenchError(f"--settle must be > 0, got {args.settle}")
+    if not (args.settle > 0 and math.isfinite(args.settle)):
+        raise RockbenchError(f"--settle must be a finite number > 0, got {args.settle}")
+    if args.refine < 0:
+        raise RockbenchError(f"--refine must be >= 0, got {args.refine}")
     spec = sp.parse_block(args.block)
     w_range, a_range = _range(args.freq, "--freq"), _range(args.accel, "--accel")
     w, a = sp.grid_axes(*sp.parse_grid(args.grid), w_range, a_range)
@@ -90,29 +97,27 @@ def execute(args: argparse.Namespace) -> int:
     settings = engine_settings(args, engines)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    par: dict[str, Any] = dict(n_jobs=args.jobs, executor=args.executor,
-                               scheduler=args.scheduler)
 
     with Progress(w.size, "analytic columns") as bar:
         ref = sp.analytic_map(spec, args.pulse, w, a, linear=args.linear, eta=args.eta,
                               tol=args.tol, on_column=lambda c: bar.advance(f"{c.w_ratio:.3g}"),
-                              **par)
+                              execution=execution)
     maps = [ref]
     eng_maps = []
     for e in engines:
         n_cells = ew.size * int((ea > 0).sum())
         with Progress(n_cells + args.refine * ew.size, f"{e} cells") as bar:
             em = sp.engine_map(e, spec, args.pulse, ew, ea, settings=settings[e],
-                               refine=args.refine, settle=args.settle, timeout=args.timeout,
-                               on_result=lambda job, tr: bar.advance(), **par)
+                               refine=args.refine, settle=args.settle, execution=execution,
+                               on_result=lambda job, tr: bar.advance())
         eng_maps.append(em)
         maps.append(em)
 
     files = [
-        sp.spectrum_figure(out / "spectrum.png", ref, eng_maps, spec, args.pulse),
-        sp.write_boundary_csv(out / "boundary.csv", maps, spec, args.pulse),
-        sp.write_cells_csv(out / "cells.csv", maps),
-        sp.write_summary_json(out / "spectrum.json", maps, spec, args.pulse,
+        fig.spectrum_figure(out / "spectrum.png", ref, eng_maps, spec, args.pulse),
+        fig.write_boundary_csv(out / "boundary.csv", maps, spec, args.pulse),
+        fig.write_cells_csv(out / "cells.csv", maps),
+        fig.write_summary_json(out / "spectrum.json", maps, spec, args.pulse,
                               {"linear": args.linear, "eta_used": args.eta}),
     ]
     rock = spec.rock

@@ -6,58 +6,21 @@ import argparse
 import sys
 from typing import Any
 
-from rockbench.cli import Progress, add_engine_arguments, engine_settings
+# check_parallel_arguments: TEMPORARY re-export for rockbench/cli/compare.py, which imports it
+# from here; delete it once that module imports it from rockbench.cli.common.
+from rockbench.cli.common import (
+    Progress,
+    add_engine_arguments,
+    add_run_arguments,
+    check_output_path,
+    check_parallel_arguments,  # noqa: F401
+    engine_settings,
+    execution_options,
+    open_store,
+)
 from rockbench.errors import RockbenchError
 
-__all__ = ["configure_matrix", "execute_matrix", "configure_history", "execute_history",
-           "add_run_arguments", "add_parallel_arguments", "check_parallel_arguments",
-           "open_store"]
-
-
-# ---------------------------------------------------------------------- shared options
-def add_run_arguments(p: argparse.ArgumentParser, *, timeout: float | None = 600.0) -> None:
-    """Options shared by matrix, sweep and tune: store, parallelism, time limit, executor."""
-    from rockbench.store import DEFAULT_DB
-
-    p.add_argument("--db", default=DEFAULT_DB, metavar="FILE",
-                   help=f"results store (SQLite), appended as each run finishes "
-                        f"(default: ./{DEFAULT_DB})")
-    p.add_argument("--no-db", action="store_true", help="do not write the results store")
-    add_parallel_arguments(p, timeout=timeout)
-
-
-def add_parallel_arguments(p: argparse.ArgumentParser, *, timeout: float | None) -> None:
-    """Parallelism, time limit and executor options of every command that runs engines."""
-    from rockbench.runner import EXECUTORS, default_jobs
-
-    p.add_argument("--jobs", "-j", type=int, default=default_jobs(), metavar="N",
-                   help="parallel engine runs (default: the machine's cores, "
-                        f"{default_jobs()} here)")
-    p.add_argument("--timeout", type=float, default=timeout, metavar="S",
-                   help=f"wall-time limit per engine run in s (default: {timeout:g})"
-                   if timeout else "wall-time limit per engine run in s")
-    p.add_argument("--executor", choices=EXECUTORS, default="process",
-                   help="local processes (default) or a Dask distributed cluster")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="Dask scheduler address, e.g. tcp://10.0.0.1:8786 (with --executor "
-                        "dask; default: a local Dask cluster)")
-
-
-def open_store(args: argparse.Namespace) -> Any:
-    """The results store named by ``--db`` (None with ``--no-db``)."""
-    from rockbench.store import Store
-
-    return None if getattr(args, "no_db", False) else Store(args.db)
-
-
-def check_parallel_arguments(args: argparse.Namespace) -> None:
-    """Reject bad ``--jobs``, ``--timeout`` and ``--scheduler`` values (one line, exit 2)."""
-    if args.jobs < 1:
-        raise RockbenchError(f"--jobs must be >= 1, got {args.jobs}")
-    if args.timeout is not None and not args.timeout > 0:
-        raise RockbenchError(f"--timeout must be > 0, got {args.timeout:g}")
-    if getattr(args, "scheduler", None) and args.executor != "dask":
-        raise RockbenchError("--scheduler needs --executor dask")
+__all__ = ["configure_matrix", "execute_matrix", "configure_history", "execute_history"]
 
 
 # ---------------------------------------------------------------------- matrix
@@ -89,23 +52,21 @@ def configure_matrix(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resume", action="store_true",
                    help="reuse runs already in the store (same scenario content, engine "
                         "version, settings and rockbench version)")
-    add_run_arguments(p)
+    add_run_arguments(p, timeout=600.0)
     p.epilog = "exit status: 0 all cells pass, 1 a cell failed or regressed, 2 bad input"
 
 
 def execute_matrix(args: argparse.Namespace) -> int:
     """Run ``rockbench matrix``; returns 0, 1 (failures/regressions) or 2 (bad input)."""
     from rockbench.engines import resolve_engine_names
-    from rockbench.report.matrix import (
-        format_grid,
-        grid_table,
-        load_baseline,
-        run_matrix,
-        write_baseline,
-        write_junit,
-    )
-    from rockbench.report.tolerances import load_tolerances
-    check_parallel_arguments(args)
+    from rockbench.studies.baseline import load_baseline
+    from rockbench.studies.matrix import run_matrix
+    from rockbench.studies.tolerances import load_tolerances
+
+    execution = execution_options(args)
+    for flag, path in (("--junit", args.junit), ("--write-baseline", args.write_baseline)):
+        if path:  # before the matrix runs, not after
+            check_output_path(path, flag)
     scenarios = _scenarios(args.suite)
     if not scenarios:
         raise RockbenchError(f"--suite {args.suite!r} selects no scenario")
@@ -128,12 +89,30 @@ def execute_matrix(args: argparse.Namespace) -> int:
 
             result = run_matrix(scenarios, engines, tolerances, settings=settings,
                                 suite=args.suite, store=store, baseline=baseline,
-                                resume=args.resume, n_jobs=args.jobs, timeout=args.timeout,
-                                executor=args.executor, scheduler=args.scheduler,
-                                on_cell=on_cell)
+                                resume=args.resume, execution=execution, on_cell=on_cell)
     finally:
         if store is not None:
             store.close()
+    _show(result)
+    if args.junit:
+        from rockbench.report.junit import write_junit
+
+        print(f"wrote {write_junit(result, args.junit)}")
+    if args.write_baseline:
+        from rockbench.studies.baseline import baseline_data, write_baseline
+
+        data = baseline_data({c.key: (c.status, c.settings, c.metrics)
+                              for c in result.cells.values()}, result.suite)
+        print(f"wrote {write_baseline(data, args.write_baseline)}")
+    if store is not None:
+        print(f"results appended to {args.db}")
+    return result.exit_code
+
+
+def _show(result: Any) -> None:
+    """Print the grid: coloured on a terminal, plain text otherwise."""
+    from rockbench.report.grid import format_grid, grid_table
+
     if sys.stdout.isatty():
         from rich.console import Console
 
@@ -146,33 +125,32 @@ def execute_matrix(args: argparse.Namespace) -> int:
             console.print(line, style=style, highlight=False, markup=False)
     else:
         print(format_grid(result), end="")
-    if args.junit:
-        print(f"wrote {write_junit(result, args.junit)}")
-    if args.write_baseline:
-        print(f"wrote {write_baseline(result, args.write_baseline)}")
-    if store is not None:
-        print(f"results appended to {args.db}")
-    return result.exit_code
 
 
 # ---------------------------------------------------------------------- history
 _HISTORY_METRICS = ("max_error", "impact_time_error", "peak_error", "wall_time")
+#: The ``kind`` of every study that records runs (its module's ``KIND``).
+STUDY_KINDS = ("compare", "matrix", "sweep", "tune")
 
 
 def configure_history(p: argparse.ArgumentParser) -> None:
     """Options of ``rockbench history``."""
+    from rockbench.evaluation import NUMERIC_METRICS
+    from rockbench.store import DEFAULT_DB
+
     p.add_argument("scenario", nargs="?", default=None,
                    help="scenario name (default: list the stored cells)")
     p.add_argument("--engine", "-e", default=None, metavar="NAMES",
                    help="comma list of engines (default: every stored engine)")
     p.add_argument("--metric", "-m", action="append", default=None, metavar="NAME",
+                   choices=sorted(NUMERIC_METRICS),
                    help=f"metric to show (repeatable; default: {', '.join(_HISTORY_METRICS)})")
-    p.add_argument("--kind", default=None, choices=("matrix", "sweep", "tune"),
-                   help="only runs made by this command")
+    p.add_argument("--kind", default=None, choices=STUDY_KINDS,
+                   help="only runs made by this study (default: every study)")
     p.add_argument("--limit", type=int, default=50, metavar="N",
-                   help="show the N latest runs per engine (default: 50)")
-    p.add_argument("--db", default="rockbench.db", metavar="FILE",
-                   help="results store (default: ./rockbench.db)")
+                   help="show the N latest runs per method (default: 50)")
+    p.add_argument("--db", default=DEFAULT_DB, metavar="FILE",
+                   help=f"results store (default: ./{DEFAULT_DB})")
 
 
 def _cell(x: Any) -> str:
@@ -180,67 +158,70 @@ def _cell(x: Any) -> str:
         return "-"
     if isinstance(x, float):
         return f"{x:.4g}"
-    if isinstance(x, list):
+    if isinstance(x, (list, tuple)):
         return ",".join(_cell(v) for v in x)
     return str(x)
 
 
-def execute_history(args: argparse.Namespace) -> int:
-    """Show how a cell's metrics changed across stored runs and versions."""
-    from pathlib import Path
+def _value(run: Any, name: str) -> float | None:
+    """A metric of a stored run (None when its metrics cannot be read back)."""
+    return None if run.metrics is None else run.metrics.value(name)
 
+
+def execute_history(args: argparse.Namespace) -> int:
+    """Show how a cell's metrics changed across stored runs and versions (any study)."""
     from rich.console import Console
     from rich.table import Table
 
     from rockbench.store import Store
 
-    if not Path(args.db).exists():
-        raise RockbenchError(f"no results store at {args.db} (run `rockbench matrix` first "
-                             "or pass --db)")
+    if args.limit < 1:
+        raise RockbenchError(f"--limit must be >= 1, got {args.limit}")
     console = Console(width=160) if not sys.stdout.isatty() else Console()
-    with Store(args.db) as store:
+    with Store(args.db, create=False) as store:
         runs = store.runs(scenario=args.scenario, kind=args.kind)
     engines = [e.strip() for e in args.engine.split(",")] if args.engine else None
     if engines:
         runs = [r for r in runs if r.engine in engines]
     if not runs:
-        what = " ".join(x for x in (args.scenario, args.engine) if x) or "anything"
+        what = " ".join(x for x in (args.scenario, args.engine, args.kind) if x) or "anything"
         print(f"no stored runs for {what} in {args.db}")
         return 0
     if args.scenario is None:  # an overview of the cells
         table = Table(title=f"stored cells in {args.db}")
-        for col in ("scenario", "engine", "runs", "last status", "last max|Δθ|/λ",
+        for col in ("scenario", "method", "runs", "kinds", "last status", "last max|Δθ|/λ",
                     "last run", "versions"):
             table.add_column(col)
         cells: dict[tuple[str, str], list[Any]] = {}
         for r in runs:
-            cells.setdefault((r.scenario, r.engine), []).append(r)
-        for (s, e), rs in sorted(cells.items()):
+            cells.setdefault((r.scenario, r.method), []).append(r)
+        for (s, method), rs in sorted(cells.items()):
             last = rs[-1]
             versions = sorted({f"{r.engine_version}/{r.rockbench_version}" for r in rs})
-            table.add_row(s, e, str(len(rs)), last.status.value,
-                          _cell(last.metrics.get("max_error")), last.timestamp,
-                          " ".join(versions))
+            kinds = ",".join(sorted({r.kind for r in rs}))
+            table.add_row(s, method, str(len(rs)), kinds, last.status.value,
+                          _cell(_value(last, "max_error")), last.timestamp, " ".join(versions))
         console.print(table)
         console.print("run `rockbench history SCENARIO` for one scenario's runs")
         return 0
     names = args.metric or list(_HISTORY_METRICS)
-    for engine in sorted({r.engine for r in runs}):
-        rows = [r for r in runs if r.engine == engine][-args.limit:]
-        table = Table(title=f"{args.scenario} on {engine}: {len(rows)} run(s)")
-        for col in ("time (UTC)", "kind", "rockbench", engine, "settings", "status", *names,
-                    "Δ " + names[0]):
+    for method in sorted({r.method for r in runs}):
+        rows = [r for r in runs if r.method == method][-args.limit:]
+        table = Table(title=f"{args.scenario} on {method}: {len(rows)} run(s)")
+        for col in ("time (UTC)", "kind", "rockbench", "engine version", "settings", "status",
+                    *names, "Δ " + names[0]):
             table.add_column(col, justify="right" if col in names else "left")
         prev = None
         for r in rows:
-            cur = r.metrics.get(names[0])
+            cur = _value(r, names[0])
             delta = "-"
-            if isinstance(cur, (int, float)) and isinstance(prev, (int, float)) and prev:
+            if cur is not None and prev:
                 delta = f"{100 * (cur - prev) / abs(prev):+.0f}%"
             settings = " ".join(f"{k}={_cell(v)}" for k, v in r.settings.items()) or "default"
+            status = r.status.value + ("" if r.metrics is not None else " (metrics unreadable)")
             table.add_row(r.timestamp.replace("+00:00", ""), r.kind, r.rockbench_version,
-                          r.engine_version, settings, r.status.value,
-                          *[_cell(r.metrics.get(n)) for n in names], delta)
+                          r.engine_version, settings, status,
+                          *[_cell(_value(r, n)) for n in names], delta)
             prev = cur if cur is not None else prev
         console.print(table)
     return 0

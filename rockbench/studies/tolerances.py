@@ -33,8 +33,11 @@ engines → engine × scenario, first at top level and then under the suite's
 section; later layers win. A metric limit is a non-negative number, or
 ``false`` to switch the check off. ``status`` is ``"reference"`` (ok or
 overturned as the reference says; any completed run when there is no
-reference), ``"completed"`` (ok or overturned), ``"any"``, or a list of
-allowed statuses.
+analytic model), ``"completed"`` (ok or overturned), ``"any"``, or a list of
+allowed statuses. A cell whose analytic reference did not complete (crashed,
+timed out, ...) fails, since it cannot be checked, unless its limits check the
+status only (a rule other than ``"reference"`` and every metric ``false``).
+Metric names are those of :data:`METRICS`.
 """
 
 from __future__ import annotations
@@ -47,20 +50,29 @@ from pathlib import Path
 from typing import Any
 
 from rockbench.errors import RockbenchError
+from rockbench.evaluation import NUMERIC_METRICS
 from rockbench.tomlfile import read_toml
 from rockbench.trajectory import Status
 
 __all__ = ["Tolerances", "ToleranceError", "METRICS", "STATUS_RULES", "load_tolerances",
            "shipped_tolerances", "DEFAULT_REGRESSION"]
 
-#: Metric limits a tolerance file may set (lower is better), with their meaning.
+#: Metric limits a tolerance file may set (upper limits: lower is better), with their
+#: meaning; each is a :data:`rockbench.evaluation.NUMERIC_METRICS` name, read with
+#: :meth:`rockbench.evaluation.RunMetrics.value`.
 METRICS: dict[str, str] = {
     "max_error": "max |Δθ|/λ against the analytic reference over the run",
     "max_error_early": "max |Δθ|/λ up to the reference's third impact",
     "impact_time_error": "largest relative error of the first three impact times",
+    "impacts_missing": "number of the reference's first impacts the run lacks",
     "peak_error": "largest |relative error| of max |θ|/λ over the blocks",
+    "time_to_rest": "time after which every |θ| stays below 0.01 λ (s)",
     "wall_time": "wall-clock time of the run in s",
+    "cpu_time": "CPU time of the run in s",
+    "slide": "largest sliding of the bottom block on the base (m)",
+    "max_wobble": "largest out-of-plane rotation (rad)",
 }
+_NOT_LIMITS = NUMERIC_METRICS - set(METRICS)  # measured, but not an upper limit
 #: Symbolic status rules.
 STATUS_RULES = ("reference", "completed", "any")
 #: Regression margins used when a file has no [regression] table.
@@ -93,6 +105,9 @@ def _limits(table: Any, where: str) -> dict[str, Any]:
             else:
                 raise ToleranceError(f"{where}.{key} must be a number >= 0 or false, "
                                      f"got {value!r}")
+        elif key in _NOT_LIMITS:
+            raise ToleranceError(f"{where}.{key}: {key!r} is measured but is not a limit "
+                                 f"(higher is not worse); limits: {', '.join(METRICS)}")
         else:
             raise ToleranceError(f"{where}: unknown metric {key!r}; known: status, "
                                  f"{', '.join(METRICS)}")
@@ -105,6 +120,10 @@ def _status_rule(value: Any, where: str) -> str | tuple[str, ...]:
             return value
         value = [value]
     if isinstance(value, list) and value:
+        odd = next((v for v in value if not isinstance(v, str)), None)
+        if odd is not None:
+            raise ToleranceError(f"{where} must list status names (strings), got "
+                                 f"{type(odd).__name__} {odd!r}")
         valid = {s.value for s in Status}
         bad = [v for v in value if v not in valid]
         if not bad:
@@ -219,7 +238,8 @@ class Tolerances:
                                          f"got {value!r}")
                 reg[key] = float(value)
             elif key == "metrics":
-                if not (isinstance(value, list) and all(v in METRICS for v in value)):
+                if not (isinstance(value, list)
+                        and all(isinstance(v, str) and v in METRICS for v in value)):
                     raise ToleranceError(f"regression.metrics must be a list of "
                                          f"{', '.join(METRICS)}")
                 reg[key] = list(value)
