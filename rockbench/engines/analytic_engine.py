@@ -45,6 +45,9 @@ class AnalyticEngine(Engine):
                                                         analytic=True)
     Settings: ClassVar[type[EngineSettings]] = AnalyticSettings
     presets: ClassVar[dict] = {"accurate": {}, "fast": {}, "linear": {"linear": True}}
+    # rockbench's own code on its core dependencies (NumPy, SciPy): nothing to install
+    requires: ClassVar[tuple[str, ...]] = ()
+    extra: ClassVar[str] = ""
 
     @classmethod
     def version(cls) -> str:

@@ -7,14 +7,25 @@ Contract for implementers (the numbered rules that every plugin follows)
    frozen :class:`~rockbench.engines.settings.EngineSettings` dataclass whose
    defaults are calibrated) and ``presets`` (at least ``"accurate"`` and
    ``"fast"``, each a mapping of knob overrides, possibly empty).
-2. Declare ``requires`` (import names of the libraries) and ``extra`` (the
-   rockbench extra that installs them). Never import a library at module level:
-   import it through :meth:`library` (which raises
-   :class:`~rockbench.errors.EngineUnavailable` with the ``pip install`` hint),
-   so that a missing library lists the engine as unavailable, never a crash.
-   Implement :meth:`version` (the library's version string). Declare checks of
-   the conformance kit the engine is known to fail in ``known_failures``
-   (check name -> measured reason).
+2. Declare ``requires`` (import names of the libraries the engine cannot run
+   without) and ``extra`` (the rockbench extra that installs them; a
+   third-party plugin leaves it empty and the hint names the library). Never
+   import a library at module level, nor catch its ImportError yourself: get it
+   through :meth:`library` (``self.library("mujoco")``, or a module-level
+   function that calls it), which raises
+   :class:`~rockbench.errors.EngineUnavailable` with the ``pip install`` hint.
+   Submodules of a library may then be imported inside methods. Implement
+   :meth:`version` (the library's version string) through :meth:`library`
+   too: :meth:`simulate` calls it first. The registry calls
+   :meth:`check_available` and :meth:`version` and lists the engine as
+   unavailable, with the reason and the hint, when either raises anything, so
+   a missing or broken library is never a crash nor a wrong "available". An
+   optional library (one the engine runs without, more slowly) is not in
+   ``requires``; :meth:`version` says whether it is used. Declare the checks
+   of the conformance kit the engine is known to fail in ``known_failures``
+   (check name -> measured reason): the test suites, yours through
+   :func:`rockbench.engines.testing.parametrize_with_checks`, mark them as
+   strict expected failures.
 3. Implement :meth:`_build`: create the minimal scene for the scenario: one
    collision shape per block (box, or convex prism if chamfered), a ground/base
    body whose top face is the plane z = 0, friction and restitution from
@@ -40,7 +51,9 @@ Contract for implementers (the numbered rules that every plugin follows)
 9. Do not override :meth:`simulate`: it owns timing, sampling at the output
    rate, NaN/explosion/energy-gain/overturning detection and the Trajectory.
 10. Register the class under the entry-point group ``rockbench.engines`` and run
-    :func:`rockbench.engines.testing.check_engine` on it.
+    the conformance kit on it: :func:`rockbench.engines.testing.check_engine`
+    (one call) or, in a pytest suite, one test decorated with
+    :func:`rockbench.engines.testing.parametrize_with_checks`.
 """
 
 from __future__ import annotations
@@ -62,7 +75,13 @@ from rockbench.errors import EngineUnavailable, UnsupportedScenario
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["Engine", "Capabilities", "angles_from_quaternions", "require_library"]
+__all__ = ["Engine", "Capabilities", "angles_from_quaternions", "install_hint",
+           "require_library"]
+
+
+def install_hint(extra: str, module: str) -> str:
+    """The command that installs an engine's library: its rockbench extra, or else the module."""
+    return f"pip install 'rockbench[{extra}]'" if extra else f"pip install {module}"
 
 
 def require_library(module: str, *, engine: str, extra: str = "") -> ModuleType:
@@ -84,10 +103,9 @@ def require_library(module: str, *, engine: str, extra: str = "") -> ModuleType:
     try:
         return importlib.import_module(module)
     except Exception as exc:  # an engine library can fail in many ways on import
-        hint = f"pip install 'rockbench[{extra}]'" if extra else f"pip install {module}"
         raise EngineUnavailable(
             f"engine {engine!r} is unavailable: cannot import {module} "
-            f"({type(exc).__name__}: {exc}); install it with: {hint}"
+            f"({type(exc).__name__}: {exc}); install it with: {install_hint(extra, module)}"
         ) from exc
 
 

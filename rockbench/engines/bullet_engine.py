@@ -41,20 +41,16 @@ from rockbench.engines.settings import EngineSettings
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import Scenario
 
-try:  # the registry reports a missing library as "unavailable"
-    import pybullet as _pb
-except ImportError as _exc:  # pragma: no cover - exercised only without pybullet
-    raise ImportError(f"pybullet is not installed ({_exc})") from _exc
-
 __all__ = ["BulletEngine", "BulletSettings"]
 
 #: Collision margin of hull and mesh blocks when ``collision_margin`` is None (m).
 _DEFAULT_HULL_MARGIN = 1e-4
 
+#: pybullet's names of the constraint solvers (looked up once pybullet is imported)
 _SOLVERS = {
-    "si": _pb.CONSTRAINT_SOLVER_LCP_SI,
-    "pgs": _pb.CONSTRAINT_SOLVER_LCP_PGS,
-    "dantzig": _pb.CONSTRAINT_SOLVER_LCP_DANTZIG,
+    "si": "CONSTRAINT_SOLVER_LCP_SI",
+    "pgs": "CONSTRAINT_SOLVER_LCP_PGS",
+    "dantzig": "CONSTRAINT_SOLVER_LCP_DANTZIG",
 }
 
 
@@ -176,7 +172,8 @@ class BulletEngine(Engine):
         # 1 ms steps, no sub-steps: ≤ 0.05 λ at ~10× less cost
         "fast": {"substeps": 0},
     }
-    install_hint: ClassVar[str] = "pip install pybullet"
+    requires: ClassVar[tuple[str, ...]] = ("pybullet",)
+    extra: ClassVar[str] = "bullet"
 
     def __init__(self) -> None:
         self._cid: int | None = None
@@ -185,10 +182,11 @@ class BulletEngine(Engine):
     def version(cls) -> str:
         from importlib.metadata import PackageNotFoundError, version
 
+        pb = cls.library("pybullet")
         try:
             return version("pybullet")
         except PackageNotFoundError:  # pragma: no cover - e.g. a source build
-            return str(_pb.getAPIVersion())
+            return str(pb.getAPIVersion())
 
     # ------------------------------------------------------------------ hooks
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
@@ -205,7 +203,7 @@ class BulletEngine(Engine):
         else:  # coarser than the output (the paper's low frame rates): interpolated
             dt = s.dt
         self._dt = dt
-        pb = _pb
+        self._pb = pb = self.library("pybullet")
         cid = pb.connect(pb.DIRECT)
         self._cid = cid
         kw = {"physicsClientId": cid}
@@ -214,7 +212,7 @@ class BulletEngine(Engine):
         # contactBreakingThreshold is process-global in Bullet: always set it
         pb.setPhysicsEngineParameter(
             fixedTimeStep=dt, numSubSteps=0, numSolverIterations=s.solver_iterations,
-            constraintSolverType=_SOLVERS[s.solver],
+            constraintSolverType=getattr(pb, _SOLVERS[s.solver]),
             solverResidualThreshold=s.solver_residual_threshold,
             contactBreakingThreshold=s.contact_breaking_threshold,
             contactSlop=s.contact_slop, erp=s.erp, contactERP=s.contact_erp,
@@ -277,7 +275,7 @@ class BulletEngine(Engine):
         return dt
 
     def _block_shape(self, blk: Any, s: BulletSettings) -> int:
-        pb, kw = _pb, self._kw
+        pb, kw = self._pb, self._kw
         hy = 0.5 * blk.depth
         if self._is_box(blk):
             shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=(blk.b, hy, blk.h), **kw)
@@ -302,7 +300,7 @@ class BulletEngine(Engine):
         return self._shape == "box" and blk.chamfer == 0.0
 
     def _set_dynamics(self, body: int, mu: float, rest: float, blk: Any) -> None:
-        pb, kw = _pb, self._kw
+        pb, kw = self._pb, self._kw
         extra: dict[str, Any] = {}
         if blk is not None:
             # box inertia (chamfer corners neglected, as the analytic models do);
@@ -323,7 +321,7 @@ class BulletEngine(Engine):
             u, v = self._u[i], self._v[i]
         else:  # beyond the precomputed window (should not happen): hold still
             u, v = self._u_end, 0.0
-        pb, g, cid = _pb, self._ground, self._cid
+        pb, g, cid = self._pb, self._ground, self._cid
         pb.resetBasePositionAndOrientation(g, (u, 0.0, self._ground_z), (0.0, 0.0, 0.0, 1.0), cid)
         pb.resetBaseVelocity(g, (v, 0.0, 0.0), (0.0, 0.0, 0.0), cid)
 
@@ -337,7 +335,7 @@ class BulletEngine(Engine):
         if i0 + n > len(self._v):  # past the precomputed window (should not happen)
             super()._advance_driven(t0, n, dt)
             return
-        pb, g, cid = _pb, self._ground, self._cid
+        pb, g, cid = self._pb, self._ground, self._cid
         if self._substeps != 0:
             pb.setPhysicsEngineParameter(fixedTimeStep=self._dt, numSubSteps=0, **self._kw)
             self._substeps = 0
@@ -349,14 +347,14 @@ class BulletEngine(Engine):
             step(cid)
 
     def _fix_base(self) -> bool:
-        pb, g, cid = _pb, self._ground, self._cid
+        pb, g, cid = self._pb, self._ground, self._cid
         pb.resetBasePositionAndOrientation(g, (self._u_end, 0.0, self._ground_z),
                                            (0.0, 0.0, 0.0, 1.0), cid)
         pb.resetBaseVelocity(g, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), cid)
         return True
 
     def _advance(self, n: int) -> None:
-        pb, cid = _pb, self._cid
+        pb, cid = self._pb, self._cid
         if n == 1:
             if self._substeps != 0:
                 pb.setPhysicsEngineParameter(fixedTimeStep=self._dt, numSubSteps=0, **self._kw)
@@ -380,7 +378,7 @@ class BulletEngine(Engine):
         pb.stepSimulation(cid)
 
     def _read_poses(self) -> np.ndarray:
-        get, cid, out = _pb.getBasePositionAndOrientation, self._cid, self._poses
+        get, cid, out = self._pb.getBasePositionAndOrientation, self._cid, self._poses
         for i, body in enumerate(self._bodies):
             (x, y, z), (qx, qy, qz, qw) = get(body, cid)
             out[i] = (x, y, z, qw, qx, qy, qz)
@@ -389,7 +387,7 @@ class BulletEngine(Engine):
     def _teardown(self) -> None:
         if self._cid is not None:
             try:
-                _pb.disconnect(physicsClientId=self._cid)
+                self._pb.disconnect(physicsClientId=self._cid)
             finally:
                 self._cid = None
 

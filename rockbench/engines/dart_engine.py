@@ -34,11 +34,6 @@ from rockbench.engines.settings import EngineSettings
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import Block, Scenario
 
-try:  # the registry reports a missing library as "unavailable"
-    import dartpy as _dart
-except ImportError:  # pragma: no cover - exercised only without dartpy
-    _dart = None
-
 __all__ = ["DartEngine", "DartSettings"]
 
 _DETECTORS = ("fcl", "ode", "bullet", "dart")
@@ -139,8 +134,9 @@ def _prism_shape(block: Block) -> Any:
             '<robot name="prism"><link name="prism"><collision><geometry>'
             f'<mesh filename="file://{path}"/></geometry></collision></link></robot>'
         )
-        skel = _dart.utils.DartLoader().parseSkeletonString(
-            urdf, _dart.common.Uri(f"file://{tmp}/"))
+        dart = DartEngine.library("dartpy")
+        skel = dart.utils.DartLoader().parseSkeletonString(
+            urdf, dart.common.Uri(f"file://{tmp}/"))
         if skel is None or skel.getNumBodyNodes() == 0:
             raise UnsupportedScenario("DART could not load the chamfered prism mesh")
         return skel.getBodyNode(0).getShapeNode(0).getShape()
@@ -167,21 +163,15 @@ class DartEngine(Engine):
         "accurate": {"timestep": 1e-4, "collision_detector": "fcl"},
         "fast": {"timestep": 1e-3, "collision_detector": "ode"},
     }
-    install_hint: ClassVar[str] = "pip install dartpy"
+    requires: ClassVar[tuple[str, ...]] = ("dartpy",)
+    extra: ClassVar[str] = "dart"
 
     @classmethod
     def version(cls) -> str:
         """dartpy's version string."""
-        if _dart is None:  # pragma: no cover
-            return "unavailable"
-        return str(getattr(_dart, "__version__", "unknown"))
+        return str(getattr(cls.library("dartpy"), "__version__", "unknown"))
 
     # ------------------------------------------------------------------ hooks
-    def _check_supported(self, scenario: Scenario) -> None:
-        # settings are not passed here; the detector check happens in _build
-        if _dart is None:  # pragma: no cover
-            raise UnsupportedScenario("dartpy is not installed")
-
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
         s: DartSettings = settings  # type: ignore[assignment]
         chamfered = any(b.chamfer > 0 for b in scenario.blocks)
@@ -192,14 +182,15 @@ class DartEngine(Engine):
                 "need collision_detector fcl/ode/bullet or chamfer_shape=narrow_box"
             )
         dt = float(s.timestep)
-        world = _dart.simulation.World()
+        dart = self.library("dartpy")
+        world = dart.simulation.World()
         world.setGravity(np.array([0.0, 0.0, -scenario.g]))
         world.setTimeStep(dt)
         opts = world.getDeactivationOptions()
         opts.mEnabled = False  # sleeping would freeze slow rocking near rest
         world.setDeactivationOptions(opts)
         world.setCollisionDetector(
-            getattr(_dart.simulation.CollisionDetectorType, s.collision_detector.upper()))
+            getattr(dart.simulation.CollisionDetectorType, s.collision_detector.upper()))
         solver = world.getConstraintSolver()
         if s.lcp_solver == "pgs":
             # PgsBoxedLcpSolver has no Python constructor: promote DART's fallback solver
@@ -218,14 +209,14 @@ class DartEngine(Engine):
         span += 2.0 * u_max + float(np.max(np.abs(scenario.stack.offsets)))
         depth = 4.0 * max(b.depth for b in scenario.blocks) + span
         thick = max(0.5, 0.25 * scenario.stack.total_height)
-        base = _dart.dynamics.Skeleton("base")
+        base = dart.dynamics.Skeleton("base")
         joint, body = base.createPrismaticJointAndBodyNodePair()
         joint.setAxis(np.array([1.0, 0.0, 0.0]))
-        joint.setActuatorType(_dart.dynamics.ActuatorType.VELOCITY
+        joint.setActuatorType(dart.dynamics.ActuatorType.VELOCITY
                               if s.base_drive == "velocity"
-                              else _dart.dynamics.ActuatorType.ACCELERATION)
+                              else dart.dynamics.ActuatorType.ACCELERATION)
         body.setMass(max(1.0, 100.0 * sum(b.m for b in scenario.blocks)))
-        _add_shape(body, _dart.dynamics.BoxShape(np.array([2.0 * span, depth, thick])),
+        _add_shape(body, dart.dynamics.BoxShape(np.array([2.0 * span, depth, thick])),
                    mu, e_body, (0.0, 0.0, -0.5 * thick))
         world.addSkeleton(base)
 
@@ -233,15 +224,15 @@ class DartEngine(Engine):
         centroids, th0 = scenario.initial_poses()
         self._skels = []
         for i, blk in enumerate(scenario.blocks):
-            skel = _dart.dynamics.Skeleton(f"block{i}")
+            skel = dart.dynamics.Skeleton(f"block{i}")
             _, bn = skel.createFreeJointAndBodyNodePair()
             if use_mesh and blk.chamfer > 0:
                 shape = _prism_shape(blk)
             else:  # plain box, or the chamfered prism's flat faces (narrow_box)
                 w = blk.width - 2.0 * blk.chamfer
-                shape = _dart.dynamics.BoxShape(np.array([w, blk.depth, blk.height]))
+                shape = dart.dynamics.BoxShape(np.array([w, blk.depth, blk.height]))
             _add_shape(bn, shape, mu, e_body)
-            bn.setInertia(_dart.dynamics.Inertia(blk.m, np.zeros(3), np.diag(blk.inertia)))
+            bn.setInertia(dart.dynamics.Inertia(blk.m, np.zeros(3), np.diag(blk.inertia)))
             # FreeJoint coordinates: rotation vector (about +y by θ0), then translation
             skel.setPositions(np.array([0.0, th0, 0.0, centroids[i, 0], 0.0, centroids[i, 1]]))
             skel.setVelocities(np.zeros(6))

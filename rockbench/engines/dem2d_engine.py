@@ -148,7 +148,20 @@ class Dem2dEngine(Engine):
         "fine": {"subcontacts": 10},
         "paper": {"subcontacts": 5, "kn": 1e9, "ks": 1e9, "beta": 2.25e-4, "safety": 0.2},
     }
-    install_hint: ClassVar[str] = "pip install 'rockbench[dem]' (numba; runs without, slowly)"
+    # numba is optional (the kernels run interpreted without it, slowly), hence no
+    # ``requires``; the extra installs it and version() says whether it is used
+    extra: ClassVar[str] = "dem"
+    # measured with benchmarks/calibrate_dem2d.py (accurate preset, N = 5 sub-contacts);
+    # keep in step with the README's engine table
+    known_failures: ClassVar[dict[str, str]] = {
+        # DEM penalty contacts under-dissipate at impacts, as the paper reports for 3DEC
+        "free_rocking": "DEM under-dissipates at impacts: impacts 2-3 are +24 %/+41 % late "
+                        "on B2 (limit 2 %)",
+        "forced_peak": "DEM: +24 % peak on the 3 Hz/8 mm pulse (compliance at k_n = 1e9 N/m3 "
+                       "plus under-dissipation at the first impact)",
+        "subthreshold": "DEM soft contact: 0.067 lambda rotation at 0.8 x the uplift "
+                        "threshold (elastic-foundation rocking; passes at k_n = 1e11)",
+    }
 
     def __init__(self) -> None:
         self._state: dict[str, Any] = {}
@@ -167,10 +180,8 @@ class Dem2dEngine(Engine):
         import rockbench
 
         if K.HAVE_NUMBA:
-            import numba
-
-            return f"{rockbench.__version__} (numba {numba.__version__})"
-        return f"{rockbench.__version__} (interpreted)"
+            return f"{rockbench.__version__} (numba {cls.library('numba').__version__})"
+        return f"{rockbench.__version__} (interpreted, without numba)"
 
     # ------------------------------------------------------------------ hooks
     def _check_supported(self, scenario: Scenario) -> None:

@@ -226,18 +226,19 @@ class DrakeEngine(Engine):
         # Drake's message); SAP (accurate) handles them
         "fast": {"timestep": 5.0e-4, "contact_approximation": "tamsi", "collision_slices": 2},
     }
-    install_hint: ClassVar[str] = "pip install drake"
+    requires: ClassVar[tuple[str, ...]] = ("pydrake",)
+    extra: ClassVar[str] = "drake"
 
     @classmethod
     def version(cls) -> str:
+        """Drake's version (its submodules are imported in the methods that use them)."""
         from importlib.metadata import PackageNotFoundError
         from importlib.metadata import version as dist_version
 
+        pydrake = cls.library("pydrake")
         try:
             return dist_version("drake")
         except PackageNotFoundError:  # a source build of pydrake
-            import pydrake
-
             return str(getattr(pydrake, "__version__", "unknown"))
 
     # ------------------------------------------------------------------ build

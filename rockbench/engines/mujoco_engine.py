@@ -162,13 +162,12 @@ class MujocoEngine(Engine):
         "fast": {"timestep": 1.0e-3, "timeconst_factor": 4.0, "iterations": 50,
                  "tolerance": 1.0e-8},
     }
-    install_hint: ClassVar[str] = "pip install mujoco"
+    requires: ClassVar[tuple[str, ...]] = ("mujoco",)
+    extra: ClassVar[str] = "mujoco"
 
     @classmethod
     def version(cls) -> str:
-        import mujoco
-
-        return str(mujoco.__version__)
+        return str(cls.library("mujoco").__version__)
 
     # ------------------------------------------------------------------ build
     def _check_supported(self, scenario: Scenario) -> None:
@@ -240,8 +239,7 @@ class MujocoEngine(Engine):
         )
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
-        import mujoco
-
+        mujoco = self.library("mujoco")
         assert isinstance(settings, MujocoSettings)
         self._model = mujoco.MjModel.from_xml_string(self.mjcf(scenario, settings))
         self._data = mujoco.MjData(self._model)

@@ -44,7 +44,7 @@ import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.settings import EngineSettings
-from rockbench.errors import EngineUnavailable, UnsupportedScenario
+from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import Scenario
 
 __all__ = ["PymunkEngine", "PymunkSettings"]
@@ -63,13 +63,8 @@ def _is_set(value: Any) -> bool:
 
 
 def _pymunk() -> Any:
-    try:
-        import pymunk
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise EngineUnavailable(
-            f"pymunk is not installed ({exc}); pip install 'rockbench[pymunk]'"
-        ) from None
-    return pymunk
+    """The pymunk module, imported on first use (rule 2 of the engine contract)."""
+    return PymunkEngine.library("pymunk")
 
 
 @dataclass(frozen=True)
@@ -132,7 +127,8 @@ class PymunkEngine(Engine):
         "fast": {"timestep": 1e-3, "iterations": 20},
         "fine": {"timestep": 5e-5, "iterations": 50},
     }
-    install_hint: ClassVar[str] = "pip install 'rockbench[pymunk]'"
+    requires: ClassVar[tuple[str, ...]] = ("pymunk",)
+    extra: ClassVar[str] = "pymunk"
 
     def __init__(self) -> None:
         self._space: Any = None

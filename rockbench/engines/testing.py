@@ -3,19 +3,29 @@
 Every check takes an engine instance (and optional settings), runs small
 scenarios and raises :class:`AssertionError` with a physical explanation when
 the engine misbehaves. :func:`conformance_checks` picks the checks that apply
-to an engine's capabilities; :func:`check_engine` runs them all.
+to an engine's capabilities; :func:`check_engine` runs them all;
+:func:`parametrize_with_checks` makes one pytest test per (engine, check),
+with the engine's ``known_failures`` as strict expected failures.
 
 Example
 -------
 >>> from rockbench.engines import get_engine
 >>> from rockbench.engines.testing import check_engine
 >>> check_engine(get_engine("mujoco"))  # doctest: +SKIP
+
+In a plugin's own test suite (pytest)::
+
+    from rockbench.engines.testing import parametrize_with_checks
+
+    @parametrize_with_checks([MyEngine])
+    def test_conformance(engine, check):
+        check(engine)
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,7 +38,7 @@ from rockbench.scenarios import Block, Scenario, SinePulse, Stack, scenario_to_d
 from rockbench.scenarios.catalog import SINGLE2, STACK2
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["Tolerances", "conformance_checks", "check_engine"]
+__all__ = ["Tolerances", "conformance_checks", "check_engine", "parametrize_with_checks"]
 
 #: The B2 block of the paper (0.5 × 0.2 × 1.0 m, 1 kg): λ = 0.4636 rad.
 B2 = Block(width=0.5, depth=0.2, height=1.0, mass=1.0)
@@ -204,21 +214,38 @@ def check_forced_peak(engine: Engine, settings: Any = None,
 
 Check = Callable[..., None]
 
+#: Every check of the kit, by name (what ``known_failures`` refers to).
+CHECKS: dict[str, Check] = {
+    c.__name__.removeprefix("check_"): c
+    for c in (check_rest, check_subthreshold, check_mirror_symmetry, check_determinism,
+              check_overturning, check_scenario_not_mutated, check_free_rocking,
+              check_forced_peak, check_stack_rest)
+}
 
-def conformance_checks(engine: Engine) -> list[tuple[str, Check]]:
+
+def conformance_checks(engine: Engine | type[Engine]) -> list[tuple[str, Check]]:
     """The checks that apply to ``engine``'s capabilities, as (name, function) pairs.
 
     Comparisons with the analytic reference are left out for the reference itself,
     where they could not fail.
+
+    Raises
+    ------
+    ValueError
+        ``engine.known_failures`` names a check that is not in the kit.
     """
+    unknown = sorted(set(engine.known_failures) - set(CHECKS))
+    if unknown:
+        raise ValueError(f"{engine.name}.known_failures names unknown check(s) "
+                         f"{', '.join(unknown)}; checks: {', '.join(CHECKS)}")
     cap = engine.capabilities
-    checks: list[Check] = [check_rest, check_subthreshold, check_mirror_symmetry,
-                           check_determinism, check_overturning, check_scenario_not_mutated]
+    names = ["rest", "subthreshold", "mirror_symmetry", "determinism", "overturning",
+             "scenario_not_mutated"]
     if not cap.analytic:
-        checks += [check_free_rocking, check_forced_peak]
+        names += ["free_rocking", "forced_peak"]
     if cap.max_blocks is None or cap.max_blocks >= 2:
-        checks.append(check_stack_rest)
-    return [(c.__name__.removeprefix("check_"), c) for c in checks]
+        names.append("stack_rest")
+    return [(n, CHECKS[n]) for n in names]
 
 
 def check_engine(engine: Engine, settings: Any = None, tol: Tolerances = Tolerances()) -> None:
@@ -232,3 +259,70 @@ def check_engine(engine: Engine, settings: Any = None, tol: Tolerances = Toleran
     if failures:
         raise AssertionError(f"{engine.name} fails {len(failures)} check(s):\n" +
                              "\n".join(failures))
+
+
+def _engine_class(item: Engine | type[Engine] | str) -> type[Engine]:
+    if isinstance(item, str):
+        from rockbench.engines.registry import engine_class
+
+        return engine_class(item)
+    return item if isinstance(item, type) else type(item)
+
+
+def parametrize_with_checks(engines: Iterable[Engine | type[Engine] | str]) -> Any:
+    """A pytest ``parametrize`` decorator over every (engine, check) pair that applies.
+
+    The decorated test takes the arguments ``engine`` (an instance) and
+    ``check`` (a function of the engine) and calls ``check(engine)``. Test ids
+    are ``<engine>-<check>``; a check in the engine's ``known_failures`` is a
+    strict expected failure with the declared reason, so fixing it shows up as
+    an unexpected pass. An engine whose libraries do not import (or whose
+    ``version()`` fails) is one explicit skip with the reason and the install
+    hint, ``<engine>-unavailable``.
+
+    Parameters
+    ----------
+    engines : iterable of Engine, Engine subclass or str
+        Instances (used as given by all their checks), classes (a fresh
+        instance per check) or registered names (likewise).
+
+    Returns
+    -------
+    pytest.MarkDecorator
+        ``pytest.mark.parametrize(("engine", "check"), ...)``.
+
+    Raises
+    ------
+    UnknownEngine
+        A name that no plugin is registered under.
+    ValueError
+        A ``known_failures`` entry that names no check of the kit.
+
+    Examples
+    --------
+    >>> @parametrize_with_checks([MyEngine])  # doctest: +SKIP
+    ... def test_conformance(engine, check):
+    ...     check(engine)
+    """
+    import pytest  # only the test suites need it
+
+    from rockbench.engines.registry import probe
+    from rockbench.errors import EngineUnavailable
+
+    params = []
+    for item in engines:
+        name = item if isinstance(item, str) else item.name
+        try:
+            cls = _engine_class(item)
+            probe(cls)
+        except EngineUnavailable as exc:
+            params.append(pytest.param(None, None, marks=pytest.mark.skip(reason=str(exc)),
+                                       id=f"{name}-unavailable"))
+            continue
+        for check_name, check in conformance_checks(cls):
+            reason = cls.known_failures.get(check_name)
+            marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
+            engine = item if isinstance(item, Engine) else cls()
+            params.append(pytest.param(engine, check, marks=marks,
+                                       id=f"{cls.name}-{check_name}"))
+    return pytest.mark.parametrize(("engine", "check"), params)
