@@ -38,7 +38,7 @@ from enum import Enum
 from typing import Any
 
 import numpy as np
-from scipy import optimize, special
+from scipy import special
 
 from rockbench.errors import RockbenchError
 
@@ -363,6 +363,10 @@ def fit_fragility(data: ExceedanceData) -> FragilityFit:
         u = q[0] + q[1] * x
         r, _ = _score_terms(u, n, z)
         return -float(_log_likelihood(q[0], q[1], x, n, z)), -np.array([r.sum(), r @ x])
+
+    # imported here: scipy.optimize takes about a second to import, and scenario files
+    # reach this package (for the record intensities) without fitting anything
+    from scipy import optimize
 
     p = z.sum() / n.sum()
     res = optimize.minimize(objective, np.array([special.ndtri(p), 1.0]), jac=True,
