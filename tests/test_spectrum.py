@@ -425,8 +425,9 @@ def test_spectrum_command_bad_input(capsys):
     assert main(["spectrum", "--freq", "5:1", "--grid", "3x3"]) == 2
     assert main(["spectrum", "--refine", "-3", "--grid", "3x3"]) == 2
     assert main(["spectrum", "--timeout", "0", "--grid", "3x3"]) == 2
+    assert main(["spectrum", "--grid", "3x3", "--out", "/proc/rockbench-no/spec"]) == 2
     err = capsys.readouterr().err
-    assert err.count("rockbench: error:") == 5
+    assert err.count("rockbench: error:") == 6 and "--out /proc/rockbench-no" in err
     assert "--refine must be >= 0" in err and "--timeout must be" in err
 
 

@@ -134,6 +134,23 @@ def test_sweep_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
     assert "--grid expects" in capsys.readouterr().err
 
 
+def test_sweep_folder_is_named_by_the_slug_of_the_scenario(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 14: a scenario name is not a path (no writing outside the working folder)."""
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    path = save_scenario(SCENARIO.replace(name="x/../../elsewhere"), tmp_path / "evil.toml")
+    assert main(["sweep", str(path), "--engine", "fault", "--set", "fault.follow=true",
+                 "--no-db", "--jobs", "1"]) == 0
+    assert [p.name for p in work.iterdir()] == ["sweep-x-..-..-elsewhere"]
+    assert (work / "sweep-x-..-..-elsewhere" / "sweep.csv").is_file()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["evil.toml", "work"]
+    (tmp_path / "file").write_text("x")
+    assert main(["sweep", str(path), "--engine", "fault", "--no-db",
+                 "--out", str(tmp_path / "file" / "sub")]) == 2
+
+
 def test_settings_files(tmp_path: Path) -> None:
     path = write_settings_file(tmp_path / "p.toml", {"fault": {"timestep": 0.002,
                                                                "follow": True}},

@@ -21,6 +21,7 @@ from rockbench.cli.common import (
     Progress,
     add_engine_arguments,
     add_parallel_arguments,
+    check_output_path,
     engine_settings,
     execution_options,
 )
@@ -96,6 +97,7 @@ def execute(args: argparse.Namespace) -> int:
     engines = [e for e in resolve_engine_names(args.engine) if e != "analytic"]
     settings = engine_settings(args, engines)
     out = Path(args.out)
+    check_output_path(out / "spectrum.png", "--out")  # before the maps are computed
     out.mkdir(parents=True, exist_ok=True)
 
     with Progress(w.size, "analytic columns") as bar:

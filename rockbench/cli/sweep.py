@@ -13,6 +13,7 @@ from rockbench.cli.common import (
     add_engine_arguments,
     add_run_arguments,
     add_settings_arguments,
+    check_output_path,
     engine_settings,
     execution_options,
     open_store,
@@ -63,13 +64,14 @@ def configure_sweep(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resume", action="store_true",
                    help="reuse runs of identical points already in the store")
     add_run_arguments(p, timeout=300.0)
-    p.epilog = ("Wall times are measured with --jobs runs in parallel; use --jobs 1 for "
-                "clean timings.")
+    p.epilog = ("A point's cost is the CPU time of its run (wall time where it is not "
+                "measured); wall times grow with --jobs runs in parallel, CPU times less so.")
 
 
 def execute_sweep(args: argparse.Namespace) -> int:
     """Run ``rockbench sweep``: the grid, its table, stability maps and the Pareto plot."""
     from rockbench.engines import resolve_engine_names
+    from rockbench.method import slug
     from rockbench.report.sweep_figures import pareto_plot, stability_map
     from rockbench.report.sweep_tables import format_table, write_table
     from rockbench.scenarios import get_scenario
@@ -83,7 +85,9 @@ def execute_sweep(args: argparse.Namespace) -> int:
     base = engine_settings(args, engines)
     grid = parse_grid(args.grid, engines)
     n = sum(math.prod(len(v) for v in g.values()) for g in grid.values())
-    out = Path(args.out or f"sweep-{scenario.name}")
+    # a scenario name is not a path: its slug names the default folder
+    out = Path(args.out or f"sweep-{slug(scenario.name)}")
+    check_output_path(out / "sweep.csv", "--out")
     store = open_store(args)
     try:
         with Progress(n, f"sweep {scenario.name}") as bar:
@@ -156,6 +160,7 @@ def execute_tune(args: argparse.Namespace) -> int:
     if len(engines) != 1:
         raise RockbenchError("tune takes exactly one engine")
     engine = engines[0]
+    out = check_output_path(args.out or f"tuned-{engine}.toml", "--out")
     base = engine_settings(args, engines)[engine]
     store = open_store(args)
     try:
@@ -181,11 +186,10 @@ def execute_tune(args: argparse.Namespace) -> int:
               f"runs (best {best:.3g}); try a larger --budget or other --knob")
         return 1
     settings = {k: v for k, v in res.best.settings.items()}
-    out = Path(args.out or f"tuned-{engine}.toml")
     write_settings_file(out, {engine: settings}, comment=[
         f"rockbench tune {scenario.name} --engine {engine} --target {args.target:g} "
         f"--metric {args.metric}",
-        f"{args.metric} = {res.best.error(args.metric):.4g}, wall time "
+        f"{args.metric} = {res.best.error(args.metric):.4g}, cost (CPU time) "
         f"{res.best.cost:.3f} s ({len(res.evaluated)} runs searched)",
         "use with: rockbench run|compare|matrix|sweep|tune|spectrum ... --settings " + out.name,
     ])
