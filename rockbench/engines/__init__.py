@@ -7,6 +7,7 @@ from rockbench.engines.registry import (
     engine_info,
     get_engine,
     list_engines,
+    probe,
     register,
     resolve_engine_names,
     unregister,
@@ -16,5 +17,5 @@ from rockbench.engines.settings import EngineSettings, SettingsError, parse_set_
 __all__ = [
     "Engine", "Capabilities", "EngineSettings", "SettingsError", "EngineInfo",
     "angles_from_quaternions", "engine_class", "engine_info", "get_engine", "list_engines",
-    "register", "unregister", "resolve_engine_names", "parse_set_options",
+    "probe", "register", "unregister", "resolve_engine_names", "parse_set_options",
 ]
