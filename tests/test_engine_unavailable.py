@@ -26,6 +26,16 @@ from pathlib import Path
 
 import pytest
 
+from rockbench.engines import (
+    engine_class,
+    list_engines,
+    register,
+    resolve_engine_names,
+    unregister,
+)
+from rockbench.engines.analytic_engine import AnalyticEngine
+from rockbench.errors import EngineUnavailable
+
 #: blocked import name -> (engine that needs it, rockbench extra that installs it)
 LIBRARIES = {
     "mujoco": ("mujoco", "mujoco"),
@@ -225,3 +235,51 @@ def test_explicitly_named_unavailable_engine_is_one_line_error(tmp_path):
     lines = r.stderr.strip().splitlines()
     assert r.returncode == 2 and len(lines) == 1, r.stderr
     assert "mujoco" in lines[0] and "pip install 'rockbench[mujoco]'" in lines[0]
+
+
+# ------------------------------------------------------------ the registry, in process
+class _BrokenVersion(AnalyticEngine):
+    """A plugin whose library imports but whose version() fails (e.g. a broken build)."""
+
+    name = "broken-version"
+    extra = "mujoco"
+
+    @classmethod
+    def version(cls) -> str:
+        raise AttributeError("module 'mujoco' has no attribute '__version__'")
+
+
+class _MissingLibrary(AnalyticEngine):
+    """A third-party plugin (no rockbench extra) whose library is not installed."""
+
+    name = "missing-library"
+    requires = ("rockbench_no_such_library",)
+
+
+@pytest.fixture
+def broken_plugins():
+    for cls in (_BrokenVersion, _MissingLibrary):
+        register(cls.name, cls)
+    yield
+    for cls in (_BrokenVersion, _MissingLibrary):
+        unregister(cls.name)
+
+
+def test_registry_reports_any_failure_as_unavailable(broken_plugins):
+    infos = {i.name: i for i in list_engines()}
+    bad = infos["broken-version"]
+    assert not bad.available and bad.version == "" and bad.dimensions is None
+    assert "AttributeError" in bad.reason and "pip install 'rockbench[mujoco]'" in bad.reason
+    missing = infos["missing-library"]
+    assert not missing.available
+    assert "ModuleNotFoundError" in missing.reason
+    assert "pip install rockbench_no_such_library" in missing.reason
+    assert infos["analytic"].available
+    names = resolve_engine_names("all")
+    assert "analytic" in names and not {"broken-version", "missing-library"} & set(names)
+    for name in ("broken-version", "missing-library"):
+        with pytest.raises(EngineUnavailable) as exc:
+            resolve_engine_names(f"analytic,{name}")
+        assert str(exc.value) == infos[name].reason and "\n" not in str(exc.value)
+    with pytest.raises(EngineUnavailable, match="rockbench_no_such_library"):
+        engine_class("missing-library")

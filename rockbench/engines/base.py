@@ -21,7 +21,10 @@ Contract for implementers (the numbered rules that every plugin follows)
    unavailable, with the reason and the hint, when either raises anything, so
    a missing or broken library is never a crash nor a wrong "available". An
    optional library (one the engine runs without, more slowly) is not in
-   ``requires``; :meth:`version` says whether it is used. Declare the checks
+   ``requires``; :meth:`version` says whether it is used (the one import that
+   may be tried at module level, catching ImportError, is such an optional
+   accelerator that decorates code at definition, like the numba of
+   ``dem2d_kernels``). Declare the checks
    of the conformance kit the engine is known to fail in ``known_failures``
    (check name -> measured reason): the test suites, yours through
    :func:`rockbench.engines.testing.parametrize_with_checks`, mark them as
