@@ -50,7 +50,11 @@ What Blender really does (measured with bpy 5.0.1, see tests/test_engine_blender
 from __future__ import annotations
 
 import math
+import os
+import sys
+import threading
 from dataclasses import dataclass
+from types import ModuleType
 from typing import Any, ClassVar, Literal
 
 import numpy as np
@@ -70,6 +74,9 @@ BLENDER_DEFAULTS: dict[str, Any] = {
     "use_deactivation": False, "substeps_per_frame": 10, "solver_iterations": 10,
     "use_split_impulse": False, "fps": 24,
 }
+
+#: Process id and thread that imported bpy (see :func:`_empty_scene`).
+_BPY_HOME: list[int] = []
 
 _SHAPES = {"box": "BOX", "convex": "CONVEX_HULL", "mesh": "MESH"}
 #: Mass of a motor-driven base per kg of blocks: contact impulses barely move it.
@@ -200,6 +207,15 @@ class BlenderEngine(Engine):
         self.base_end = math.nan
 
     @classmethod
+    def library(cls, module: str) -> ModuleType:
+        """Import a library (rule 2), noting which process and thread first imported bpy."""
+        fresh = module == "bpy" and module not in sys.modules
+        lib = super().library(module)
+        if fresh:
+            _BPY_HOME[:] = [os.getpid(), threading.get_ident()]
+        return lib
+
+    @classmethod
     def version(cls) -> str:
         """Blender's version string (``bpy.app.version_string``)."""
         return str(cls.library("bpy").app.version_string)
@@ -219,6 +235,7 @@ class BlenderEngine(Engine):
         frame = 1.0 / s.fps
         n_frames = int(math.ceil(scenario.duration / frame - 1e-9)) + 2
         scene.frame_start, scene.frame_end = 1, 1 + n_frames
+        scene.frame_set(1)
         bpy.ops.rigidbody.world_add()
         world = scene.rigidbody_world
         world.enabled = True
@@ -285,6 +302,7 @@ class BlenderEngine(Engine):
         i = min(int(round(t / dt)) + 1, len(self._u) - 1)
         if self._motor is None:
             self._base.location.x = self._u[i]
+            self._bpy.context.view_layer.update()
         else:
             # a positive target velocity moves object2 (the base) toward −x (measured)
             self._motor.motor_lin_target_velocity = -(self._u[i] - self._u[i - 1]) / dt
@@ -322,8 +340,29 @@ class BlenderEngine(Engine):
 
 
 def _empty_scene(bpy: Any) -> None:
-    """Reset Blender's global session to an empty factory scene."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    """Reset Blender's global session to an empty factory scene.
+
+    Blender loads files (the factory settings too) only on the thread that imported
+    bpy: a process forked from another thread (the runner's pool forks its workers
+    from a manager thread) crashes with SIGSEGV in ``read_factory_settings`` if its
+    parent had imported bpy. There the scene is emptied through the data API instead
+    (rigid body world, objects, meshes and collections removed; every setting the
+    build uses is set again by the build).
+    """
+    if _BPY_HOME == [os.getpid(), threading.get_ident()]:
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        return
+    scene = bpy.context.scene
+    if scene.rigidbody_world is not None:
+        bpy.ops.rigidbody.world_remove()
+    for ob in list(bpy.data.objects):
+        bpy.data.objects.remove(ob, do_unlink=True)
+    for mesh in list(bpy.data.meshes):
+        bpy.data.meshes.remove(mesh)
+    for coll in list(bpy.data.collections):
+        bpy.data.collections.remove(coll)
+    # a rigid body world added away from frame 1 starts from other transforms
+    scene.frame_set(1)
 
 
 def _box_profile(b: float, h: float) -> np.ndarray:
@@ -358,14 +397,23 @@ def _prism(bpy: Any, scene: Any, name: str, profile: np.ndarray, half_depth: flo
     return ob
 
 
+def _operator(bpy: Any, scene: Any, ob: Any, op: Any, **kw: Any) -> None:
+    """Run an object operator on ``ob`` with its context given explicitly.
+
+    Off Blender's main thread (a forked worker) ``bpy.context`` has no active object,
+    and ``constraint_add`` also reads the view layer's (without it: SIGSEGV).
+    """
+    view_layer = scene.view_layers[0]
+    view_layer.objects.active = ob
+    with bpy.context.temp_override(scene=scene, view_layer=view_layer, object=ob,
+                                   active_object=ob, selected_objects=[ob]):
+        op(**kw)
+
+
 def _rigid_body(bpy: Any, ob: Any, s: BlenderSettings, *, type_: str, shape: str, mass: float,
                 friction: float, restitution: float, kinematic: bool) -> None:
     """Make ``ob`` a rigid body and set every property (none left at Blender's default)."""
-    view_layer = bpy.context.view_layer
-    view_layer.objects.active = ob
-    ob.select_set(True)
-    bpy.ops.rigidbody.object_add(type=type_)
-    ob.select_set(False)
+    _operator(bpy, ob.users_scene[0], ob, bpy.ops.rigidbody.object_add, type=type_)
     rb = ob.rigid_body
     rb.enabled = True
     rb.collision_shape = shape
@@ -400,10 +448,7 @@ def _motor_drive(bpy: Any, scene: Any, base: Any, s: BlenderSettings) -> Any:
     for kind in ("GENERIC", "MOTOR"):
         ob = bpy.data.objects.new(kind.lower(), None)
         scene.collection.objects.link(ob)
-        bpy.context.view_layer.objects.active = ob
-        ob.select_set(True)
-        bpy.ops.rigidbody.constraint_add(type=kind)
-        ob.select_set(False)
+        _operator(bpy, scene, ob, bpy.ops.rigidbody.constraint_add, type=kind)
         c = ob.rigid_body_constraint
         c.object1, c.object2, c.disable_collisions = anchor, base, True
         c.use_breaking = False
