@@ -26,6 +26,10 @@ computed anywhere else. Definitions (angles normalised by the scenario's λ):
 * ``slide``: the bottom block's largest departure from rigid rocking
   kinematics (sliding or contact drift, m); ``max_wobble``: largest out-of-plane
   rotation (rad).
+* ``interface_slip``, ``interface_gap``: the largest departure of the upper
+  blocks from rigid no-slip rocking on the block below (:func:`interface_motion`,
+  m; None for a single block): tangential (slip along the lower block's top
+  face) and normal (gap, or penetration, at the active interface pivot).
 """
 
 from __future__ import annotations
@@ -42,7 +46,8 @@ from rockbench.method import Method
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["RunMetrics", "RunResult", "evaluate_run", "rocking_impacts", "sliding", "finite_or_none",
+__all__ = ["RunMetrics", "RunResult", "evaluate_run", "rocking_impacts", "sliding",
+           "interface_motion", "finite_or_none",
            "IMPACT_THRESHOLD", "PEAK_FLOOR", "N_IMPACTS", "NUMERIC_METRICS"]
 
 #: A zero crossing of θ is an impact only after |θ| reached this fraction of λ.
@@ -92,6 +97,62 @@ def sliding(traj: Trajectory, scenario: Scenario) -> float | None:
     return float(np.max(np.abs(traj.x[keep, 0] - x_kin[keep]))) if keep.any() else None
 
 
+def interface_motion(traj: Trajectory,
+                     scenario: Scenario) -> tuple[float | None, float | None]:
+    """Largest slip and gap (m) of each upper block on the block below, from the poses.
+
+    Without slip or separation, the active interface pivot (the corner of the
+    contact face on the side of the relative rotation φ = θ_up − θ_lo) is one
+    point of both blocks: ``X_lo + R(θ_lo) (x_p − o_lo, h_lo)`` and
+    ``X_up + R(θ_up) (x_p − o_up, −h_up)`` (X the centroid, o the block's offset,
+    x_p the pivot's x in the stack's upright frame, R the rotation about +y).
+    Their difference, resolved along the lower block's top face, is the slip;
+    normal to it, the gap (separation or penetration). Both are the largest
+    magnitudes over the interfaces and over the samples where every block is within its
+    critical angle on its support (a falling block slides when it lands).
+
+    Returns
+    -------
+    (max_slip, max_gap) : tuple of float or None
+        None for a single block or a trajectory without finite positions.
+    """
+    nb = scenario.n_blocks
+    if nb < 2 or traj.t.size == 0:
+        return None, None
+    if not (np.all(np.isfinite(traj.x)) and np.all(np.isfinite(traj.z))):
+        return None, None
+    # not falling: the bottom block within its λ, each upper one within its interface's
+    keep = np.abs(traj.theta[:, 0]) <= scenario.blocks[0].rocking(scenario.g).lam
+    for i in range(1, nb):
+        keep &= (np.abs(traj.theta[:, i] - traj.theta[:, i - 1])
+                 <= scenario.stack.interface(i, scenario.g).lam)
+    if not keep.any():
+        return None, None
+    th, x, z = traj.theta[keep], traj.x[keep], traj.z[keep]
+    offs = scenario.stack.offsets
+    slip = gap = 0.0
+    for i in range(1, nb):
+        lo, up = scenario.blocks[i - 1], scenario.blocks[i]
+        o_lo, o_up = offs[i - 1], offs[i]
+        right = min(o_lo + lo.pivot_half_width, o_up + up.pivot_half_width)
+        left = max(o_lo - lo.pivot_half_width, o_up - up.pivot_half_width)
+        phi = th[:, i] - th[:, i - 1]
+        # at φ = 0 (face contact) every point of the face is shared: take its middle
+        xp = np.where(phi > 0, right, np.where(phi < 0, left, 0.5 * (left + right)))
+        pts = []
+        for k, (o, hz) in enumerate(((o_lo, lo.h), (o_up, -up.h))):
+            j = i - 1 + k
+            vx, c, s = xp - o, np.cos(th[:, j]), np.sin(th[:, j])
+            # R(θ)(v_x, v_z) = (v_x cos θ + v_z sin θ, −v_x sin θ + v_z cos θ)
+            pts.append((x[:, j] + vx * c + hz * s, z[:, j] - vx * s + hz * c))
+        dx, dz = pts[1][0] - pts[0][0], pts[1][1] - pts[0][1]
+        c, s = np.cos(th[:, i - 1]), np.sin(th[:, i - 1])
+        # lower block's top face: tangent R(θ)(1, 0) = (c, −s), normal R(θ)(0, 1) = (s, c)
+        slip = max(slip, float(np.max(np.abs(dx * c - dz * s))))
+        gap = max(gap, float(np.max(np.abs(dx * s + dz * c))))
+    return slip, gap
+
+
 def _floats(values: Any) -> tuple[float | None, ...]:
     return tuple(finite_or_none(v) for v in values)
 
@@ -132,6 +193,8 @@ class RunMetrics:
     impact_time_error: float | None = None
     impacts_missing: int | None = None
     error_note: str = ""
+    interface_slip: float | None = None
+    interface_gap: float | None = None
 
     @property
     def completed(self) -> bool:
@@ -199,7 +262,7 @@ class RunMetrics:
 NUMERIC_METRICS = frozenset({
     "max_error", "max_error_early", "peak_error", "impact_time_error", "impacts_missing",
     "time_to_rest", "reference_time_to_rest", "wall_time", "cpu_time", "realtime_factor",
-    "slide", "max_wobble", "simulated_time",
+    "slide", "max_wobble", "simulated_time", "interface_slip", "interface_gap",
 })
 
 
@@ -227,6 +290,7 @@ def evaluate_run(scenario: Scenario, traj: Trajectory, reference: Trajectory | N
     n = traj.t.size
     simulated = float(traj.t[-1]) if n else 0.0
     wall = float(traj.wall_time)
+    slip, gap = interface_motion(traj, scenario)
     base: dict[str, Any] = dict(
         status=traj.status, message=traj.message, n_blocks=scenario.n_blocks,
         critical_angle=lam, duration=scenario.duration,
@@ -237,6 +301,7 @@ def evaluate_run(scenario: Scenario, traj: Trajectory, reference: Trajectory | N
         time_to_rest=finite_or_none(metrics.time_to_rest(traj, lam)) if n else None,
         max_wobble=finite_or_none(np.max(np.abs(traj.wobble))) if n else None,
         slide=sliding(traj, scenario),
+        interface_slip=slip, interface_gap=gap,
         engine_version=engine_version or traj.engine_version, settings_hash=settings_hash,
         scenario_hash=scenario_hash,
     )

@@ -41,6 +41,19 @@ fixed pivot needs exceeds μ times the normal force. That last threshold is
 derived here from the equations of incipient rocking (see
 :func:`regime_thresholds`), as in Shenton's analysis.
 
+Interface slip of a two-block stack (``Contact.interface_friction`` μᵢ below
+the base friction μ): while the base holds the lower block, the upper block is a
+block sliding on a base that moves like the lower one, so the same closed forms
+with μᵢ give its slip on the lower block exactly. The base holds when
+m₁ max|ü_g| + μᵢ m₂ g ≤ μ (m₁ + m₂) g (the largest friction the lower block
+needs, whether the interface sticks or slips). Nothing rocks when μᵢ is below
+the upper block's uplift ratio b_c/h₂ and the whole stack's (while stuck, the
+stack accelerates at most μᵢ g), and when the lower block, loaded by the sliding
+upper one (a horizontal μᵢ m₂ g at its top, the weight m₂ g off-centre by μᵢ h₂),
+keeps its moment about a base pivot: m₁ max|ü_g| h₁ + 2 μᵢ m₂ g h₁ <
+g (m₁ b₁ + m₂ (b₁ − μᵢ h₂)). Outside these bounds both contacts may slip, or
+slip and rock, and there is no exact reference.
+
 References: Y. Ishiyama, "Motions of rigid bodies and criteria for overturning
 by earthquake excitations", Earthquake Engng Struct. Dyn. 10 (1982) 635–650;
 H. W. Shenton III, "Criteria for initiation of slide, rock, and slide-rock
@@ -67,6 +80,7 @@ from rockbench.trajectory import Status, Trajectory
 __all__ = [
     "Regime", "RegimeThresholds", "regime_thresholds", "onset_regime", "SlipPhase",
     "SlidingSolution", "solve_sliding", "slides", "sliding_reference", "slip_of",
+    "interface_slips", "interface_slip_bounds",
 ]
 
 #: Default scan step (s) of the event functions.
@@ -392,14 +406,64 @@ def solve_sliding(
                            mu=mu, g=g)
 
 
+def interface_slips(scenario: Scenario) -> bool:
+    """True if the upper block of a two-block stack can slip on the lower one.
+
+    That is: upright centred blocks at rest, an interface friction below the
+    base friction (with equal coefficients the stack slides as one body) and a
+    base acceleration that exceeds μᵢ g at some time.
+    """
+    c = scenario.contact
+    if scenario.n_blocks != 2 or c.interface_friction is None:
+        return False
+    if scenario.initial_tilt != 0.0 or any(scenario.stack.offsets):
+        return False
+    mu_i = c.interface_friction
+    return mu_i < c.friction and (scenario.excitation.peak_acceleration(scenario.duration)
+                                  > mu_i * scenario.g)
+
+
+def interface_slip_bounds(scenario: Scenario) -> tuple[str, ...]:
+    """Why the exact interface-slip reference does not hold (empty: it holds).
+
+    Checks the bounds of the module notes: the base holds the lower block, and
+    neither the upper block, nor the stack, nor the loaded lower block rocks.
+    """
+    lo, up = scenario.blocks
+    g, mu, mu_i = scenario.g, scenario.contact.friction, scenario.contact.block_friction
+    m1, m2 = lo.m, up.m
+    a = scenario.excitation.peak_acceleration(scenario.duration)
+    b1, h1, h2 = lo.pivot_half_width, lo.h, up.h
+    bc = min(lo.pivot_half_width, up.pivot_half_width)
+    out = []
+    if m1 * a + mu_i * m2 * g > mu * (m1 + m2) * g:
+        out.append(f"the base friction {mu:g} may not hold the lower block (it needs up to "
+                   f"{(m1 * a + mu_i * m2 * g) / ((m1 + m2) * g):.4g})")
+    if mu_i >= bc / h2:
+        out.append(f"interface friction {mu_i:g} at or above the upper block's uplift ratio "
+                   f"{bc / h2:.4g} (it could rock)")
+    lam_m = scenario.stack.monolithic(g).lam
+    if mu_i >= math.tan(lam_m):
+        out.append(f"interface friction {mu_i:g} at or above the stack's uplift ratio "
+                   f"{math.tan(lam_m):.4g} (the stuck stack could rock)")
+    if m1 * a * h1 + 2.0 * mu_i * m2 * g * h1 >= g * (m1 * b1 + m2 * (b1 - mu_i * h2)):
+        out.append("the lower block, loaded by the sliding upper one, could rock")
+    return tuple(out)
+
+
 def slides(scenario: Scenario) -> bool:
-    """True if the exact sliding reference applies to ``scenario`` and the block slides.
+    """True if the exact sliding reference applies to ``scenario`` and a block slides.
 
     That is: one block or a centred stack, starting upright and at rest, friction
     below every uplift ratio (μ < tan λ of each block on its support and of the
     whole stack: no rocking, see the module notes) and a base acceleration that
-    exceeds μ g at some time.
+    exceeds μ g at some time; or a two-block stack whose upper block slips on the
+    lower one (:func:`interface_slips`; :func:`sliding_reference` then refuses
+    the cases its bounds do not cover rather than leave them to a rocking model
+    that assumes no slip).
     """
+    if interface_slips(scenario):
+        return True
     if scenario.initial_tilt != 0.0 or any(scenario.stack.offsets):
         return False
     mu = scenario.contact.friction
@@ -414,7 +478,9 @@ def sliding_reference(scenario: Scenario, *, scan_step: float = SCAN_STEP) -> Tr
     Parameters
     ----------
     scenario : Scenario
-        Upright centred blocks at rest whose friction is below every uplift ratio.
+        Upright centred blocks at rest whose friction is below every uplift ratio,
+        or a two-block stack whose upper block slips on the lower one within the
+        bounds of :func:`interface_slip_bounds`.
     scan_step : float
         Scan step of the stick/slip events (s).
 
@@ -422,24 +488,33 @@ def sliding_reference(scenario: Scenario, *, scan_step: float = SCAN_STEP) -> Tr
     -------
     Trajectory
         θ = 0, centroid x = upright x + u_g + s (base displacement plus slip) and
-        z upright, for every block; status ``ok``; ``extra`` holds the model
-        name, the stick/slip phases, the final and largest slip and the slip path.
+        z upright, for every block (with interface slip: s = 0 for the lower
+        block and the upper block's slip on it for the upper one); status ``ok``;
+        ``extra`` holds the model name, the stick/slip phases, the final and
+        largest slip and the slip path.
 
     Raises
     ------
     UnsupportedScenario
-        Tilted or off-centre blocks, or friction at or above an uplift ratio
-        (the block could rock).
+        Tilted or off-centre blocks, friction at or above an uplift ratio
+        (the block could rock), or an interface slip outside the exact bounds.
     """
     if scenario.initial_tilt != 0.0 or any(scenario.stack.offsets):
         raise UnsupportedScenario("the sliding reference needs upright, centred blocks")
-    mu = scenario.contact.friction
-    ratio = math.tan(scenario.critical_angle)
-    if mu >= ratio:
-        raise UnsupportedScenario(
-            f"the sliding reference needs friction {mu:g} below the uplift ratio {ratio:.4g} "
-            f"(the block could rock)"
-        )
+    on_interface = interface_slips(scenario)
+    if on_interface:
+        why = interface_slip_bounds(scenario)
+        if why:
+            raise UnsupportedScenario("no exact interface-slip reference: " + "; ".join(why))
+        mu = scenario.contact.block_friction
+    else:
+        mu = scenario.contact.friction
+        ratio = math.tan(scenario.critical_angle)
+        if mu >= ratio:
+            raise UnsupportedScenario(
+                f"the sliding reference needs friction {mu:g} below the uplift ratio "
+                f"{ratio:.4g} (the block could rock)"
+            )
     exc = scenario.excitation
     t_out = scenario.output_times()
     start = time.perf_counter()
@@ -447,16 +522,19 @@ def sliding_reference(scenario: Scenario, *, scan_step: float = SCAN_STEP) -> Tr
     wall = time.perf_counter() - start
     c = scenario.stack.centroids
     nb = scenario.n_blocks
-    moved = np.asarray(exc.displacement(t_out), float) + sol.slip
-    x = c[None, :, 0] + moved[:, None]
+    ug = np.asarray(exc.displacement(t_out), float)
+    # which blocks carry the slip: all of them (one body on the base), or the upper one
+    slipping = np.arange(nb) >= (1 if on_interface else 0)
+    x = c[None, :, 0] + ug[:, None] + sol.slip[:, None] * slipping[None, :]
     z = np.broadcast_to(c[None, :, 1], (t_out.size, nb)).copy()
+    where = "on the lower block" if on_interface else "on the base"
     return Trajectory(
         t=t_out, theta=np.zeros((t_out.size, nb)), x=x, z=z, status=Status.OK,
-        message=f"slid {sol.path:.6g} m in {sol.slip_times.size} slip phase(s)",
+        message=f"slid {sol.path:.6g} m {where} in {sol.slip_times.size} slip phase(s)",
         wall_time=wall, engine="analytic", engine_version=f"sliding-{rockbench.__version__}",
         settings={"scan_step": scan_step, "brentq_xtol": 1e-15}, scenario=scenario.name,
         extra={
-            "model": "coulomb-sliding",
+            "model": "coulomb-interface-sliding" if on_interface else "coulomb-sliding",
             "phases": [[p.start, p.end, p.direction] for p in sol.phases],
             "final_slip": float(sol.slip[-1]),
             "max_slip": float(np.max(np.abs(sol.slip))),

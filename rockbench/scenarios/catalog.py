@@ -10,6 +10,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 from rockbench.errors import UnknownScenario
+from rockbench.scenarios.assembly import (
+    Assembly,
+    drum_column,
+    parapet,
+    running_bond_wall,
+    voussoir_arch,
+)
 from rockbench.scenarios.excitation import SinePulse, Sinusoid
 from rockbench.scenarios.files import load_scenario
 from rockbench.scenarios.model import Block, Contact, Scenario, Stack
@@ -121,6 +128,9 @@ def suites() -> dict[str, list[str]]:
     groups["records"] = [n for n in names if n.startswith("record-")]
     groups["smoke"] = ["free-b2-0.5", "single-pulse-3.0hz-8mm", "stack-pulse-4.0hz-4mm"]
     groups["sliding"] = [n for n in names if n.startswith("slide-")]
+    for family in ASSEMBLY_FAMILIES:
+        groups[f"assembly-{family}"] = [n for n in names if n.startswith(f"{family}-")]
+    groups["assemblies"] = [n for f in ASSEMBLY_FAMILIES for n in groups[f"assembly-{f}"]]
     return groups
 
 
@@ -178,3 +188,61 @@ def _sliding() -> dict[str, Callable[[], Scenario]]:
 
 
 _CATALOG.update(_sliding())
+
+
+#: Interface slip: the paper's stack on a base whose friction μ holds it, with a lower
+#: interface friction μᵢ: the upper block slides on the lower one, which moves with the
+#: base; nothing rocks (bounds and exact reference: rockbench.analytic.sliding).
+#: (name, excitation, μ, μᵢ, duration).
+INTERFACE_SLIDING_CASES = (
+    ("slide-stack-pulse-5.0hz-3mm-mu0.25-if0.05", SinePulse(5.0, 0.003), 0.25, 0.05, 1.5),
+)
+
+
+def _interface_sliding() -> dict[str, Callable[[], Scenario]]:
+    cat: dict[str, Callable[[], Scenario]] = {}
+    for name, exc, mu, mu_i, dur in INTERFACE_SLIDING_CASES:
+        cat[name] = lambda name=name, exc=exc, mu=mu, mu_i=mu_i, dur=dur: Scenario(
+            name=name, stack=STACK2, contact=Contact(friction=mu, interface_friction=mu_i),
+            excitation=exc, duration=dur, output_rate=RATE,
+            description=f"interface friction μᵢ = {mu_i:g} under base friction μ = {mu:g}: "
+                        "the upper block slides on the lower one (Coulomb sliding)",
+        )
+    return cat
+
+
+_CATALOG.update(_interface_sliding())
+
+
+#: Masonry assemblies at rest on a still base (issue 18): name → builder. The families
+#: are parametrised (rockbench.scenarios.assembly); the catalog keeps a few members each.
+ASSEMBLY_CASES: dict[str, Callable[[], Assembly]] = {
+    **{f"column-{n}drums": (lambda n=n: drum_column(n)) for n in (3, 5, 10)},
+    **{f"parapet-offset{e:.2f}": (lambda e=e: parapet(e)) for e in (0.0, 0.25)},
+    **{f"wall-{c}x{b}": (lambda c=c, b=b: running_bond_wall(c, b)) for c, b in ((6, 3), (10, 3))},
+    **{f"arch-{n}v-t{t:.2f}": (lambda n=n, t=t: voussoir_arch(n, t)) for n, t in ((9, 0.15),
+                                                                                 (9, 0.20))},
+}
+#: Family prefixes of ASSEMBLY_CASES; each has the suite ``assembly-<family>``.
+ASSEMBLY_FAMILIES = ("column", "parapet", "wall", "arch")
+_ASSEMBLY_TEXT = {
+    "column": "multi-drum column of {n} drums 0.6 × 0.5 m",
+    "parapet": "parapet 0.3 × 0.8 m on a wall 0.6 × 1.2 m, its centre {n} from the wall's",
+    "wall": "dry-stack wall panel in running bond, {n} (courses x bricks), bricks 0.24 × 0.12 m",
+    "arch": "semicircular arch R = 1 m, {n} on two springer supports",
+}
+
+
+def _assemblies() -> dict[str, Callable[[], Scenario]]:
+    cat: dict[str, Callable[[], Scenario]] = {}
+    for name, build in ASSEMBLY_CASES.items():
+        family, param = name.split("-", 1)
+        text = _ASSEMBLY_TEXT[family].format(n=param)
+        cat[name] = lambda name=name, build=build, text=text: Scenario(
+            name=name, stack=build(), contact=Contact(friction=1.0), duration=2.0,
+            output_rate=RATE, description=f"{text}, at rest (issue 18)",
+        )
+    return cat
+
+
+_CATALOG.update(_assemblies())

@@ -23,7 +23,7 @@ __all__ = ["load_scenario", "save_scenario", "scenario_from_dict", "scenario_to_
 _TOP = {"name", "description", "duration", "output_rate", "gravity", "blocks", "contact",
         "initial", "excitation"}
 _BLOCK = {"width", "depth", "height", "mass", "density", "chamfer", "offset"}
-_CONTACT = {"friction", "restitution", "eta"}
+_CONTACT = {"friction", "restitution", "eta", "interface_friction"}
 _INITIAL = {"tilt", "tilt_rad"}
 
 

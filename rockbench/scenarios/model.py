@@ -291,11 +291,15 @@ class Contact:
     eta : float, optional
         Override of the analytic impact ratio (θ̇⁺ = η θ̇⁻) for single blocks;
         default Housner's 1 − 2mb²/I_O.
+    interface_friction : float, optional
+        Coulomb coefficient (≥ 0) of the block–block contacts of a stack; None
+        (default): the same as ``friction``, which then holds for every contact.
     """
 
     friction: float = 1.0
     restitution: float = 0.0
     eta: float | None = None
+    interface_friction: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "friction", _check(self.friction, "contact friction",
@@ -305,12 +309,22 @@ class Contact:
         if self.eta is not None:
             object.__setattr__(self, "eta", _check(self.eta, "contact eta", strict=False,
                                                    high=1.0))
+        if self.interface_friction is not None:
+            object.__setattr__(self, "interface_friction", _check(
+                self.interface_friction, "contact interface_friction", strict=False))
+
+    @property
+    def block_friction(self) -> float:
+        """Coulomb coefficient between two blocks (``interface_friction`` or ``friction``)."""
+        return self.friction if self.interface_friction is None else self.interface_friction
 
     def to_dict(self) -> dict[str, Any]:
         """Scenario-file representation."""
         d: dict[str, Any] = {"friction": self.friction, "restitution": self.restitution}
         if self.eta is not None:
             d["eta"] = self.eta
+        if self.interface_friction is not None:
+            d["interface_friction"] = self.interface_friction
         return d
 
 
