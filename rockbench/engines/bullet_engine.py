@@ -10,7 +10,8 @@ DIRECT-mode client (``pybullet.connect(pybullet.DIRECT)``), disconnected in
 Measured pitfalls this module works around (see docs/engine-notes.md):
 
 * Bullet combines friction and restitution of two bodies as a product, so each
-  body gets sqrt(μ) and sqrt(e).
+  body gets sqrt(μ) and sqrt(e) (with an interface friction: see
+  :func:`product_frictions`).
 * Default linear/angular damping is 0.04: set to 0.
 * ``contactBreakingThreshold`` (default 0.02 m) keeps the lifted pivot's contact
   points in the manifold while the edge is less than 2 cm above the ground; this
@@ -244,15 +245,16 @@ class BulletEngine(Engine):
         self._ground = pb.createMultiBody(0.0, gshape, basePosition=(0.0, 0.0, self._ground_z),
                                           useMaximalCoordinates=ground_maximal, **kw)
 
-        mu = math.sqrt(scenario.contact.friction)
+        mus = product_frictions(scenario.contact.friction, scenario.contact.block_friction,
+                                scenario.n_blocks)
         e = scenario.contact.restitution if s.restitution is None else s.restitution
         rest = math.sqrt(e)
-        self._set_dynamics(self._ground, mu, rest, None)
+        self._set_dynamics(self._ground, mus[0], rest, None)
 
         centroids, th0 = scenario.initial_poses()
         quat = (0.0, math.sin(0.5 * th0), 0.0, math.cos(0.5 * th0))
         self._bodies: list[int] = []
-        for blk, (cx, cz) in zip(blocks, centroids, strict=True):
+        for blk, (cx, cz), mu in zip(blocks, centroids, mus[1:], strict=True):
             shape = self._block_shape(blk, s)
             body = pb.createMultiBody(blk.m, shape, basePosition=(float(cx), 0.0, float(cz)),
                                       baseOrientation=quat,
@@ -390,6 +392,18 @@ class BulletEngine(Engine):
                 self._pb.disconnect(physicsClientId=self._cid)
             finally:
                 self._cid = None
+
+
+def product_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
+    """Per-body coefficients (ground first) whose pairwise products are μ and μ_if.
+
+    Bullet multiplies the two bodies' coefficients: ground–bottom block gets μ and
+    every block–block pair μ_if. Equal coefficients keep the square root on every
+    body; otherwise the ground carries μ, the blocks alternate 1 and μ_if.
+    """
+    if mu_if == mu:
+        return [math.sqrt(mu)] * (n_blocks + 1)
+    return [mu] + [1.0 if i % 2 == 0 else mu_if for i in range(n_blocks)]
 
 
 def _substeps_exact(n: int, dt: float) -> bool:

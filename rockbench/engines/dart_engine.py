@@ -198,6 +198,9 @@ class DartEngine(Engine):
         solver.setSplitImpulseEnabled(bool(s.split_impulse))
 
         mu = float(scenario.contact.friction)
+        # DART takes the smaller coefficient of a pair: the ground carries μ, the blocks
+        # μ_if, the bottom block at least μ (so that the ground's rules its contact)
+        mu_if = float(scenario.contact.block_friction)
         e = float(scenario.contact.restitution)
         e_body = math.sqrt(e) if s.restitution_mode == "sqrt" else e
 
@@ -231,7 +234,7 @@ class DartEngine(Engine):
             else:  # plain box, or the chamfered prism's flat faces (narrow_box)
                 w = blk.width - 2.0 * blk.chamfer
                 shape = dart.dynamics.BoxShape(np.array([w, blk.depth, blk.height]))
-            _add_shape(bn, shape, mu, e_body)
+            _add_shape(bn, shape, max(mu, mu_if) if i == 0 else mu_if, e_body)
             bn.setInertia(dart.dynamics.Inertia(blk.m, np.zeros(3), np.diag(blk.inertia)))
             # FreeJoint coordinates: rotation vector (about +y by θ0), then translation
             skel.setPositions(np.array([0.0, th0, 0.0, centroids[i, 0], 0.0, centroids[i, 1]]))

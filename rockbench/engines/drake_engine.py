@@ -25,7 +25,8 @@ Scene (a MultibodyPlant + SceneGraph Diagram stepped by a Simulator)
   symplectic-Euler/leapfrog pairing). No input port is involved, so there is no
   half-step shift of a zero-order-held input. After the excitation the joint is
   locked (SAP) or its velocity zeroed (TAMSI), and steps are batched in C++.
-* Contact: Coulomb friction from the scenario (static = dynamic). Point contact
+* Contact: Coulomb friction from the scenario (static = dynamic; an interface
+  friction through per-geometry coefficients, :func:`harmonic_frictions`). Point contact
   stiffness is ``point_stiffness`` (or, if None, Drake's estimate from
   ``penetration_allowance``); dissipation is SAP's ``relaxation_time`` (for the
   ``"sap"`` approximation) or the Hunt–Crossley ``hunt_crossley_dissipation``
@@ -211,6 +212,25 @@ def prism_obj(profile: np.ndarray, depth: float) -> str:
     return "\n".join(lines) + "\n"
 
 
+def harmonic_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
+    """Per-geometry coefficients (ground first) that Drake combines into μ and μ_if.
+
+    Drake gives a pair 2 μ₁ μ₂ / (μ₁ + μ₂): with a = 1/μ per geometry, a pair's
+    a's sum to 2/μ_pair. The bottom block takes a₀ = min(1/μ, 1/μ_if), which leaves
+    every other a positive; the blocks above alternate 2/μ_if − a₀ and a₀.
+    """
+    if mu_if == mu:
+        return [mu] * (n_blocks + 1)
+    if mu == 0.0:  # a zero coefficient makes every pair it is in frictionless
+        return [0.0] + [mu_if] * n_blocks
+    if mu_if == 0.0:
+        return [mu] + [mu if i % 2 == 0 else 0.0 for i in range(n_blocks)]
+    a0 = min(1.0 / mu, 1.0 / mu_if)
+    a_odd = 2.0 / mu_if - a0
+    return [1.0 / (2.0 / mu - a0)] + [1.0 / (a0 if i % 2 == 0 else a_odd)
+                                       for i in range(n_blocks)]
+
+
 class DrakeEngine(Engine):
     """Drake (Toyota Research Institute) multibody plant with compliant convex contact."""
 
@@ -305,10 +325,12 @@ class DrakeEngine(Engine):
         if k is None and s.static_penetration is not None:
             # the weight is shared by the n_sl slices' contacts along the rocking edge
             k = 2.0 * sum(b.m for b in blocks) * scenario.g / (n_sl * s.static_penetration)
-        p_block = self._proximity(s, mu, k, compliant=True)
-        p_ground = self._proximity(s, mu, k, compliant=False)
+        mus = harmonic_frictions(mu, scenario.contact.block_friction, len(blocks))
+        p_blocks = {f: self._proximity(s, f, k, compliant=True) for f in set(mus[1:])}
+        p_ground = self._proximity(s, mus[0], k, compliant=False)
         bodies = []
         for i, blk in enumerate(blocks):
+            p_block = p_blocks[mus[i + 1]]
             inertia = np.asarray(blk.inertia, float) / blk.m
             body = plant.AddRigidBody(
                 f"block{i}", SpatialInertia(blk.m, np.zeros(3), UnitInertia(*inertia)))

@@ -17,7 +17,9 @@ Scene (built as an MJCF string from the Scenario)
   in the contact Jacobian.) After the excitation the slide joint gets a huge
   (implicitly integrated) damping, which holds the base still so that steps
   are batched in C.
-* Contacts: condim 3, Coulomb friction from the scenario, elliptic cone by
+* Contacts: condim 3, Coulomb friction from the scenario (an interface
+  friction on the blocks' geoms, the base's friction on the base geom, whose
+  higher ``priority`` makes it rule its contacts with the blocks), elliptic cone by
   default, ``solref`` time constant = ``timeconst_factor`` × time step and damping
   ratio ``dampratio`` (critical damping gives a perfectly plastic impact),
   ``solimp`` tight. MuJoCo has no restitution coefficient: a scenario
@@ -38,7 +40,7 @@ import numpy as np
 from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.settings import EngineSettings
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import Scenario
+from rockbench.scenarios import Block, Scenario
 
 __all__ = ["MujocoEngine", "MujocoSettings"]
 
@@ -154,7 +156,7 @@ class MujocoEngine(Engine):
 
     name: ClassVar[str] = "mujoco"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
-                                                        chamfer=True)
+                                                        chamfer=True, assemblies=True)
     Settings: ClassVar[type[EngineSettings]] = MujocoSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
@@ -185,23 +187,31 @@ class MujocoEngine(Engine):
         zeta = restitution_dampratio(e) if e > 0 else s.dampratio
         tau = s.timeconst_factor * s.timestep
         mu = scenario.contact.friction
-        geom_common = (
-            f'condim="3" friction="{_fmt(mu)} 0 0" solref="{_fmt(tau)} {_fmt(zeta)}" '
+        mu_if = scenario.contact.block_friction
+        contact_common = (
+            f'condim="3" solref="{_fmt(tau)} {_fmt(zeta)}" '
             f'solimp="{_fmt(s.solimp_dmin)} {_fmt(s.solimp_dmax)} {_fmt(s.solimp_width)} 0.5 2" '
             'margin="0" gap="0"'
         )
+        geom_common = f'friction="{_fmt(mu_if)} 0 0" {contact_common}'
+        base_common = f'friction="{_fmt(mu)} 0 0" {contact_common}'
+        if mu_if != mu:  # equal priorities take the larger friction
+            base_common += ' priority="1"'
         centroids, th = scenario.initial_poses()
-        quat = (math.cos(0.5 * th), 0.0, math.sin(0.5 * th), 0.0)
         mass_total = sum(b.m for b in blocks)
         # a base large enough for the stack, its tilt and the base travel
         ext = scenario.stack.total_height + max(b.width for b in blocks)
+        if scenario.is_assembly:  # wide scenes: the blocks' spread along x too
+            ext += scenario.stack.reach + scenario.stack.size
         hx = 2.0 * ext + 2.0 * scenario.excitation.motion_bounds(scenario.duration)[0] + 1.0
         hy = 2.0 * max(b.depth for b in blocks) + 0.5
         hz = 0.25 * ext + 0.1
         flags = "" if s.multiccd else ' multiccd="disable"'
         assets, bodies = [], []
-        for i, (blk, c) in enumerate(zip(blocks, centroids, strict=True)):
-            if blk.chamfer > 0:
+        for i, (blk, c, th_i) in enumerate(zip(blocks, centroids, th + scenario.block_angles,
+                                               strict=True)):
+            quat = (math.cos(0.5 * th_i), 0.0, math.sin(0.5 * th_i), 0.0)
+            if blk.chamfer > 0 or not isinstance(blk, Block):  # a convex prism
                 prof = blk.profile()
                 hd = 0.5 * blk.depth
                 verts = [(x, y, z) for y in (-hd, hd) for x, z in prof]
@@ -209,14 +219,26 @@ class MujocoEngine(Engine):
                 shape = f'type="mesh" mesh="prism{i}"'
             else:
                 shape = f'type="box" size="{_fmt((blk.b, 0.5 * blk.depth, blk.h))}"'
+            if isinstance(blk, Block):
+                inertia = f'diaginertia="{_fmt(blk.inertia)}"'
+            else:  # a polygon's x–z product of inertia is not zero
+                t = blk.inertia_tensor
+                inertia = f'fullinertia="{_fmt((t[0, 0], t[1, 1], t[2, 2], 0.0, t[0, 2], 0.0))}"'
             bodies.append(
                 f'<body name="block{i}" pos="{_fmt((c[0], 0.0, c[1]))}" quat="{_fmt(quat)}">'
                 f'<freejoint name="free{i}"/>'
-                f'<inertial pos="0 0 0" mass="{_fmt(blk.m)}" diaginertia="{_fmt(blk.inertia)}"/>'
+                f'<inertial pos="0 0 0" mass="{_fmt(blk.m)}" {inertia}/>'
                 f'<geom name="geom{i}" {shape} {geom_common}/></body>'
             )
         base_geom = (f'<geom name="base" type="box" size="{_fmt((hx, hy, hz))}" '
-                     f'pos="0 0 {_fmt(-hz)}" {geom_common}/>')
+                     f'pos="0 0 {_fmt(-hz)}" {base_common}/>')
+        # an assembly's fixed supports: prisms (world coordinates) on the base, wider than
+        # any block in depth
+        for j, sup in enumerate(getattr(scenario.stack, "supports", ())):
+            hd = max(b.depth for b in blocks)
+            verts = [(x, y, z) for y in (-hd, hd) for x, z in sup.vertices]
+            assets.append(f'<mesh name="support{j}" vertex="{_fmt(verts)}"/>')
+            base_geom += f'<geom name="support{j}" type="mesh" mesh="support{j}" {base_common}/>'
         if scenario.excitation.is_free:
             base = base_geom
         else:

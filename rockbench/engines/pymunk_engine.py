@@ -50,8 +50,10 @@ from rockbench.scenarios import Scenario
 __all__ = ["PymunkEngine", "PymunkSettings"]
 
 # Scenario fields known to be planar (x–z) or to act only through mass/inertia
-_PLANAR_BLOCK_FIELDS = frozenset({"width", "depth", "height", "density", "mass", "chamfer"})
-_PLANAR_STACK_FIELDS = frozenset({"blocks", "offsets"})
+# (a Block's or a Prism's; a Stack's or an Assembly's)
+_PLANAR_BLOCK_FIELDS = frozenset({"width", "depth", "height", "density", "mass", "chamfer",
+                                  "vertices", "_centroid", "_area", "_moments"})
+_PLANAR_STACK_FIELDS = frozenset({"blocks", "offsets", "poses", "supports", "_centroids"})
 
 
 def _is_set(value: Any) -> bool:
@@ -119,7 +121,7 @@ class PymunkEngine(Engine):
 
     name: ClassVar[str] = "pymunk"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=2, max_blocks=None,
-                                                        chamfer=True)
+                                                        chamfer=True, assemblies=True)
     Settings: ClassVar[type[EngineSettings]] = PymunkSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
@@ -188,7 +190,13 @@ class PymunkEngine(Engine):
         space.sleep_time_threshold = math.inf  # never sleep
         # Chipmunk multiplies the two shapes' coefficients: the square root on
         # every shape gives each contact pair exactly the scenario's values
-        mu = math.sqrt(scenario.contact.friction)
+        # (an interface friction: the base carries μ, the blocks alternate 1 and μ_if)
+        c = scenario.contact
+        if c.block_friction == c.friction:
+            mus = [math.sqrt(c.friction)] * (scenario.n_blocks + 1)
+        else:
+            mus = [c.friction] + [1.0 if i % 2 == 0 else c.block_friction
+                                  for i in range(scenario.n_blocks)]
         e = math.sqrt(scenario.contact.restitution)
 
         exc = scenario.excitation
@@ -211,21 +219,31 @@ class PymunkEngine(Engine):
         # base: wide enough for any toppled block plus the base travel, and
         # thick enough that nothing tunnels through it
         half = 2.0 * (h_tot + w_max) + u_max + 1.0
+        if scenario.is_assembly:  # wide scenes: the blocks' spread along x too
+            half += scenario.stack.reach + scenario.stack.size
         thick = max(1.0, 0.5 * h_tot)
         base = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         base.position = (0.0, 0.0)
         base_shape = pymunk.Poly(base, [(-half, -thick), (half, -thick), (half, 0.0),
                                         (-half, 0.0)], radius=0.0)
-        base_shape.friction = mu
+        base_shape.friction = mus[0]
         base_shape.elasticity = e
         space.add(base, base_shape)
+        # an assembly's fixed supports: more shapes of the base body (the base is at
+        # x = 0 now, so base coordinates are world coordinates)
+        for sup in getattr(scenario.stack, "supports", ()):
+            shape = pymunk.Poly(base, [tuple(map(float, v)) for v in sup.vertices], radius=0.0)
+            shape.friction = mus[0]
+            shape.elasticity = e
+            space.add(shape)
 
         centroids, th0 = scenario.initial_poses()
         blocks = []
-        for blk, (cx, cz) in zip(scenario.blocks, centroids, strict=True):
+        for blk, (cx, cz), th, mu in zip(scenario.blocks, centroids,
+                                         th0 + scenario.block_angles, mus[1:], strict=True):
             body = pymunk.Body(float(blk.m), float(blk.inertia[1]))
             body.position = (float(cx), float(cz))
-            body.angle = -th0  # pymunk's angle is counter-clockwise: θ = −angle
+            body.angle = -float(th)  # pymunk's angle is counter-clockwise: θ = −angle
             shape = pymunk.Poly(body, [tuple(map(float, v)) for v in blk.profile()],
                                 radius=0.0)
             shape.friction = mu
