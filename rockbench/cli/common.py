@@ -18,7 +18,8 @@ from typing import Any
 
 from rockbench.errors import RockbenchError
 
-__all__ = ["add_engine_arguments", "add_settings_arguments", "engine_settings", "Progress",
+__all__ = ["selected_engines", "add_engine_arguments", "add_settings_arguments",
+           "engine_settings", "Progress",
            "add_run_arguments", "add_store_arguments", "add_parallel_arguments",
            "check_parallel_arguments", "execution_options", "open_store", "check_output_path"]
 
@@ -29,6 +30,25 @@ def add_engine_arguments(p: argparse.ArgumentParser, default: str = "all") -> No
     p.add_argument("--engine", "-e", default=default, metavar="NAMES",
                    help=f"'all' or a comma list of engines (default: {default})")
     add_settings_arguments(p)
+
+
+def selected_engines(spec: str, *, include_analytic: bool = True) -> list[str]:
+    """The engines an ``--engine`` value selects; ``all`` says on stderr which it left out.
+
+    Raises
+    ------
+    UnknownEngine, EngineUnavailable
+        A named engine that does not exist or cannot run (one clear line).
+    """
+    from rockbench.engines import list_engines, resolve_engine_names
+
+    names = resolve_engine_names(spec, include_analytic=include_analytic)
+    if "all" in [x.strip().lower() for x in spec.split(",")]:
+        missing = [i.name for i in list_engines() if not i.available]
+        if missing:
+            print(f"rockbench: --engine all leaves out the unavailable {', '.join(missing)} "
+                  "(see `rockbench engines`)", file=sys.stderr)
+    return names
 
 
 def add_settings_arguments(p: argparse.ArgumentParser) -> None:

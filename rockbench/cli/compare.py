@@ -13,26 +13,27 @@ import argparse
 import shlex
 from pathlib import Path
 
-from rockbench.cli import Progress, add_engine_arguments, engine_settings
-from rockbench.cli.matrix import check_parallel_arguments
+from rockbench.cli.common import (
+    Progress,
+    add_engine_arguments,
+    add_store_arguments,
+    engine_settings,
+    execution_options,
+    selected_engines,
+)
 from rockbench.errors import RockbenchError, UnknownScenario
 from rockbench.store import DEFAULT_DB
 
-__all__ = ["configure", "execute", "DEFAULT_PRESETS"]
+__all__ = ["COMMANDS", "configure_compare", "execute_compare", "DEFAULT_PRESETS"]
+
+#: The commands of this module: name → one-line help.
+COMMANDS = {"compare": "run a suite on engines and write the report"}
 
 #: Presets run by default: see the --presets help for why both.
 DEFAULT_PRESETS = ("accurate", "fast")
 
 
-def add_store_arguments(p: argparse.ArgumentParser) -> None:
-    """``--db FILE`` and ``--no-db``: where a study records its runs."""
-    p.add_argument("--db", default=DEFAULT_DB, metavar="FILE",
-                   help=f"results store (SQLite) that records every run as it finishes and "
-                        f"that --resume and `rockbench history` read (default: ./{DEFAULT_DB})")
-    p.add_argument("--no-db", action="store_true", help="do not write the results store")
-
-
-def configure(p: argparse.ArgumentParser) -> None:
+def configure_compare(p: argparse.ArgumentParser) -> None:
     """Add the ``compare`` options to ``p``."""
     from rockbench.studies.sensitivity import SUITE
 
@@ -100,12 +101,11 @@ def _command_line(args: argparse.Namespace) -> str:
     return shlex.join(parts)
 
 
-def execute(args: argparse.Namespace) -> int:
+def execute_compare(args: argparse.Namespace) -> int:
     """Run the comparison and write the report; 0 when the report is written."""
-    from rockbench.engines import engine_class, resolve_engine_names
+    from rockbench.engines import engine_class
     from rockbench.method import REFERENCE
     from rockbench.report.compare_report import write_report
-    from rockbench.runner import ExecutionOptions
     from rockbench.scenarios import get_scenario, get_suite, resolve_scenarios, suites
     from rockbench.studies.compare import CompareOptions, run_comparison
     from rockbench.studies.sensitivity import SUITE
@@ -122,7 +122,7 @@ def execute(args: argparse.Namespace) -> int:
         scenarios = resolve_scenarios(args.scenarios)
         if not scenarios:
             raise RockbenchError("--scenarios names no scenario")
-    check_parallel_arguments(args)
+    execution = execution_options(args, isolate=not args.no_isolate)
     if args.preset and args.presets:
         raise RockbenchError("give either --preset or --presets, not both")
     if args.preset:
@@ -133,7 +133,7 @@ def execute(args: argparse.Namespace) -> int:
             raise RockbenchError("--presets names no preset")
     else:
         presets = list(DEFAULT_PRESETS)
-    engines = resolve_engine_names(args.engine)
+    engines = selected_engines(args.engine)
     ns = argparse.Namespace(**{**vars(args), "preset": None})
     settings = engine_settings(ns, engines)
     overrides: dict[str, dict[str, object]] = {}
@@ -155,7 +155,7 @@ def execute(args: argparse.Namespace) -> int:
     opts = CompareOptions(
         scenarios=scenarios, engines=[e for e in engines if e != REFERENCE], out=out,
         presets=presets, overrides=overrides, timeout=args.timeout,
-        execution=ExecutionOptions(jobs=args.jobs, isolate=not args.no_isolate),
+        execution=execution,
         resume=args.resume, db=None if args.no_db else Path(args.db),
         sensitivity=sensitivity,
         suite=label, command=_command_line(args), embed_figures=not args.link_figures)

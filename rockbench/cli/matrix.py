@@ -6,21 +6,26 @@ import argparse
 import sys
 from typing import Any
 
-# check_parallel_arguments: TEMPORARY re-export for rockbench/cli/compare.py, which imports it
-# from here; delete it once that module imports it from rockbench.cli.common.
 from rockbench.cli.common import (
     Progress,
     add_engine_arguments,
     add_run_arguments,
     check_output_path,
-    check_parallel_arguments,  # noqa: F401
     engine_settings,
     execution_options,
     open_store,
+    selected_engines,
 )
 from rockbench.errors import RockbenchError
 
-__all__ = ["configure_matrix", "execute_matrix", "configure_history", "execute_history"]
+__all__ = ["COMMANDS", "configure_matrix", "execute_matrix", "configure_history",
+           "execute_history"]
+
+#: The commands of this module: name → one-line help.
+COMMANDS = {
+    "matrix": "engines × scenarios pass/fail matrix",
+    "history": "metrics of a cell across stored runs",
+}
 
 
 # ---------------------------------------------------------------------- matrix
@@ -58,7 +63,6 @@ def configure_matrix(p: argparse.ArgumentParser) -> None:
 
 def execute_matrix(args: argparse.Namespace) -> int:
     """Run ``rockbench matrix``; returns 0, 1 (failures/regressions) or 2 (bad input)."""
-    from rockbench.engines import resolve_engine_names
     from rockbench.studies.baseline import load_baseline
     from rockbench.studies.matrix import run_matrix
     from rockbench.studies.tolerances import load_tolerances
@@ -70,7 +74,7 @@ def execute_matrix(args: argparse.Namespace) -> int:
     scenarios = _scenarios(args.suite)
     if not scenarios:
         raise RockbenchError(f"--suite {args.suite!r} selects no scenario")
-    engines = resolve_engine_names(args.engine, include_analytic=False)
+    engines = selected_engines(args.engine, include_analytic=False)
     settings = engine_settings(args, engines)
     tolerances = load_tolerances(args.tolerances)
     baseline = load_baseline(args.baseline) if args.baseline else None
@@ -171,6 +175,7 @@ def _value(run: Any, name: str) -> float | None:
 def execute_history(args: argparse.Namespace) -> int:
     """Show how a cell's metrics changed across stored runs and versions (any study)."""
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
 
     from rockbench.store import Store
@@ -199,7 +204,7 @@ def execute_history(args: argparse.Namespace) -> int:
             last = rs[-1]
             versions = sorted({f"{r.engine_version}/{r.rockbench_version}" for r in rs})
             kinds = ",".join(sorted({r.kind for r in rs}))
-            table.add_row(s, method, str(len(rs)), kinds, last.status.value,
+            table.add_row(escape(s), escape(method), str(len(rs)), kinds, last.status.value,
                           _cell(_value(last, "max_error")), last.timestamp, " ".join(versions))
         console.print(table)
         console.print("run `rockbench history SCENARIO` for one scenario's runs")
@@ -207,7 +212,7 @@ def execute_history(args: argparse.Namespace) -> int:
     names = args.metric or list(_HISTORY_METRICS)
     for method in sorted({r.method for r in runs}):
         rows = [r for r in runs if r.method == method][-args.limit:]
-        table = Table(title=f"{args.scenario} on {method}: {len(rows)} run(s)")
+        table = Table(title=escape(f"{args.scenario} on {method}: {len(rows)} run(s)"))
         for col in ("time (UTC)", "kind", "rockbench", "engine version", "settings", "status",
                     *names, "Δ " + names[0]):
             table.add_column(col, justify="right" if col in names else "left")
@@ -220,7 +225,7 @@ def execute_history(args: argparse.Namespace) -> int:
             settings = " ".join(f"{k}={_cell(v)}" for k, v in r.settings.items()) or "default"
             status = r.status.value + ("" if r.metrics is not None else " (metrics unreadable)")
             table.add_row(r.timestamp.replace("+00:00", ""), r.kind, r.rockbench_version,
-                          r.engine_version, settings, status,
+                          r.engine_version, escape(settings), status,
                           *[_cell(_value(r, n)) for n in names], delta)
             prev = cur if cur is not None else prev
         console.print(table)

@@ -24,10 +24,14 @@ from rockbench.cli.common import (
     check_output_path,
     engine_settings,
     execution_options,
+    selected_engines,
 )
 from rockbench.errors import RockbenchError
 
-__all__ = ["configure", "execute"]
+__all__ = ["COMMANDS", "configure_spectrum", "execute_spectrum"]
+
+#: The commands of this module: name → one-line help.
+COMMANDS = {"spectrum": "overturning spectra: min overturning acceleration vs pulse frequency"}
 
 
 def _range(text: str, what: str) -> tuple[float, float]:
@@ -38,7 +42,7 @@ def _range(text: str, what: str) -> tuple[float, float]:
     return lo, hi
 
 
-def configure(p: argparse.ArgumentParser) -> None:
+def configure_spectrum(p: argparse.ArgumentParser) -> None:
     """Arguments of ``rockbench spectrum``."""
     p.add_argument("--block", "-b", default="1x5", metavar="SPEC",
                    help="catalog scenario or scenario .toml (its first block and contact), or "
@@ -72,12 +76,11 @@ def configure(p: argparse.ArgumentParser) -> None:
     add_parallel_arguments(p, timeout=300.0)
 
 
-def execute(args: argparse.Namespace) -> int:
+def execute_spectrum(args: argparse.Namespace) -> int:
     """Run ``rockbench spectrum``; returns the exit status."""
     from rich.console import Console
     from rich.table import Table
 
-    from rockbench.engines import resolve_engine_names
     from rockbench.report import spectrum_figures as fig
     from rockbench.studies import spectrum as sp
 
@@ -94,7 +97,7 @@ def execute(args: argparse.Namespace) -> int:
     w_range, a_range = _range(args.freq, "--freq"), _range(args.accel, "--accel")
     w, a = sp.grid_axes(*sp.parse_grid(args.grid), w_range, a_range)
     ew, ea = sp.grid_axes(*sp.parse_grid(args.engine_grid), w_range, a_range)
-    engines = [e for e in resolve_engine_names(args.engine) if e != "analytic"]
+    engines = [e for e in selected_engines(args.engine) if e != "analytic"]
     settings = engine_settings(args, engines)
     out = Path(args.out)
     check_output_path(out / "spectrum.png", "--out")  # before the maps are computed

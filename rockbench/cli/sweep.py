@@ -17,10 +17,17 @@ from rockbench.cli.common import (
     engine_settings,
     execution_options,
     open_store,
+    selected_engines,
 )
 from rockbench.errors import RockbenchError
 
-__all__ = ["configure_sweep", "execute_sweep", "configure_tune", "execute_tune"]
+__all__ = ["COMMANDS", "configure_sweep", "execute_sweep", "configure_tune", "execute_tune"]
+
+#: The commands of this module: name → one-line help.
+COMMANDS = {
+    "sweep": "settings grids: accuracy vs cost, stability",
+    "tune": "find the cheapest settings meeting a target",
+}
 
 
 def _metric_arguments(p: argparse.ArgumentParser) -> None:
@@ -70,7 +77,6 @@ def configure_sweep(p: argparse.ArgumentParser) -> None:
 
 def execute_sweep(args: argparse.Namespace) -> int:
     """Run ``rockbench sweep``: the grid, its table, stability maps and the Pareto plot."""
-    from rockbench.engines import resolve_engine_names
     from rockbench.method import slug
     from rockbench.report.sweep_figures import pareto_plot, stability_map
     from rockbench.report.sweep_tables import format_table, write_table
@@ -81,7 +87,7 @@ def execute_sweep(args: argparse.Namespace) -> int:
     if args.target is not None and not args.target > 0:
         raise RockbenchError(f"--target must be > 0, got {args.target:g}")
     scenario = get_scenario(args.scenario)
-    engines = resolve_engine_names(args.engine, include_analytic=False)
+    engines = selected_engines(args.engine, include_analytic=False)
     base = engine_settings(args, engines)
     grid = parse_grid(args.grid, engines)
     n = sum(math.prod(len(v) for v in g.values()) for g in grid.values())
@@ -145,7 +151,6 @@ def configure_tune(p: argparse.ArgumentParser) -> None:
 
 def execute_tune(args: argparse.Namespace) -> int:
     """Run ``rockbench tune``; writes the settings file when the target is reached."""
-    from rockbench.engines import resolve_engine_names
     from rockbench.presets import write_settings_file
     from rockbench.scenarios import get_scenario
     from rockbench.studies.tune import tune
@@ -156,7 +161,7 @@ def execute_tune(args: argparse.Namespace) -> int:
     if args.budget < 1:
         raise RockbenchError(f"--budget must be >= 1, got {args.budget}")
     scenario = get_scenario(args.scenario)
-    engines = resolve_engine_names(args.engine, include_analytic=False)
+    engines = selected_engines(args.engine, include_analytic=False)
     if len(engines) != 1:
         raise RockbenchError("tune takes exactly one engine")
     engine = engines[0]

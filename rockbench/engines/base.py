@@ -243,7 +243,7 @@ class Engine(ABC):
         except UnsupportedScenario as exc:
             return Trajectory.failed(Status.UNSUPPORTED, str(exc), n_blocks=scenario.n_blocks,
                                      **meta)
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         try:
             traj = self._run(scenario, s, meta)
         except UnsupportedScenario as exc:  # raised by _build when it depends on settings
@@ -252,6 +252,7 @@ class Engine(ABC):
         finally:
             self._teardown()
         traj.wall_time = time.perf_counter() - start
+        traj.cpu_time = time.process_time() - cpu
         return traj
 
     # ------------------------------------------------------------------ the loop

@@ -225,7 +225,8 @@ def _write_document(result: CompareResult, start: float | None) -> list[Path]:
             "Wall-clock times exclude process start-up; each run is timed inside its own "
             "worker process" + (" (one run at a time, so timings do not compete for cores)."
                                 if opts.execution.jobs == 1 else
-                                f" ({opts.execution.jobs} runs in parallel: timings may be inflated)."))
+                                f" ({opts.execution.jobs} runs in parallel: timings may be "
+                                "inflated)."))
         tsec.items.append(timing_table(ctx))
         sections.append(tsec)
     if result.b0 is not None:

@@ -83,7 +83,7 @@ class Context:
 
 def input_label(s: Scenario) -> tuple[str, str]:
     """(frequency in Hz, amplitude in mm) of a periodic input, else a description."""
-    d = s.excitation.to_dict()
+    d = s.excitation.to_table()
     if "frequency" in d and "amplitude" in d:
         return f"{float(d['frequency']):.1f}", f"{1000.0 * float(d['amplitude']):g}"
     return d.get("type", "?"), "–"

@@ -27,10 +27,11 @@ from matplotlib.lines import Line2D
 from rockbench.evaluation import RunResult
 from rockbench.method import REFERENCE, Method
 from rockbench.scenarios import Scenario
+from rockbench.studies.pareto import pareto_front
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = ["MethodStyle", "method_styles", "time_history_figure", "peak_input_figure",
-           "accuracy_speed_figure", "sensitivity_figure", "pareto_front", "SpeedPoint",
+           "accuracy_speed_figure", "sensitivity_figure", "SpeedPoint",
            "variations_speed_figure"]
 
 _COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
@@ -326,17 +327,10 @@ class SpeedPoint:
     total: int
 
 
-def pareto_front(points: Sequence[tuple[float, float]]) -> list[int]:
-    """Indices of the non-dominated points (smaller x and y are better), sorted by x."""
-    idx = [i for i, (x, y) in enumerate(points) if math.isfinite(x) and math.isfinite(y)]
-    front = []
-    for i in idx:
-        xi, yi = points[i]
-        dominated = any(points[j][0] <= xi and points[j][1] <= yi and points[j] != points[i]
-                        for j in idx)
-        if not dominated:
-            front.append(i)
-    return sorted(front, key=lambda i: points[i][0])
+def _front(xy: Sequence[tuple[float, float]]) -> list[int]:
+    """Indices of the Pareto-front points (positive errors only), cheapest first."""
+    return pareto_front(range(len(xy)), cost=lambda i: xy[i][0],
+                        error=lambda i: xy[i][1] if xy[i][1] > 0 else math.nan)
 
 
 def accuracy_speed_figure(path: Path, points: Sequence[SpeedPoint],
@@ -362,7 +356,7 @@ def accuracy_speed_figure(path: Path, points: Sequence[SpeedPoint],
             yhi = max(v[1] for v in good) * 3
         else:
             ylo, yhi = 1e-4, 1.0
-        front = pareto_front([(x, y) if y > 0 else (x, math.nan) for x, y in xy])
+        front = _front(xy)
         if len(front) > 1:
             fx = [xy[i][0] for i in front]
             fy = [xy[i][1] for i in front]
@@ -491,7 +485,7 @@ def variations_speed_figure(path: Path, points: Sequence[SpeedPoint],
     good = [y for x, y in xy if math.isfinite(x) and math.isfinite(y) and y > 0]
     yhi = max(good) * 3 if good else 1.0
     ylo = min(good) / 3 if good else 1e-4
-    front = pareto_front([(x, y) if y > 0 else (x, math.nan) for x, y in xy])
+    front = _front(xy)
     if len(front) > 1:
         ax.step([xy[i][0] for i in front], [xy[i][1] for i in front], where="post",
                 color="0.55", lw=1.2, ls="--", zorder=1)

@@ -28,12 +28,14 @@ from typing import Any
 import rockbench
 from rockbench.engines import engine_class
 from rockbench.errors import RockbenchError
-from rockbench.evaluation import RunResult, evaluate_run
+from rockbench.evaluation import RunResult
 from rockbench.method import REFERENCE, Method, slug
 from rockbench.runner import ExecutionOptions, Job, run_jobs
 from rockbench.scenarios import Scenario, get_scenario, scenario_to_dict
-from rockbench.store import Store, scenario_hash
+from rockbench.store import Store
 from rockbench.studies import sensitivity as sens
+from rockbench.studies.recording import measure, record_run, settings_hash
+from rockbench.studies.references import NO_MODEL, references
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = ["CompareOptions", "CompareResult", "PlannedRun", "run_comparison", "default_timeout",
@@ -217,13 +219,16 @@ def run_comparison(opts: CompareOptions,
                    progress: Callable[[int, str], Any] | None = None) -> CompareResult:
     """Run every planned job (reusing stored ones with ``resume``) and return the results.
 
+    The analytic references are computed first (or taken from the store's
+    cache), so that every engine run is evaluated and recorded as it finishes.
+
     Parameters
     ----------
     opts : CompareOptions
         What to run and where.
     progress : callable, optional
         ``progress(total, description)`` returns a context manager with an
-        ``advance(text)`` method (e.g. :class:`rockbench.cli.Progress`).
+        ``advance(text)`` method (e.g. :class:`rockbench.cli.common.Progress`).
 
     Raises
     ------
@@ -242,6 +247,7 @@ def run_comparison(opts: CompareOptions,
     store = Store(opts.db) if opts.db is not None else None
     with store if store is not None else contextlib.nullcontext():
         trajs: dict[tuple[str, str], Trajectory] = {}
+        results: dict[tuple[str, str], RunResult] = {}
         todo: list[PlannedRun] = []
         for run in runs:
             traj = _stored(store, run, out, versions) if opts.resume else None
@@ -250,55 +256,45 @@ def run_comparison(opts: CompareOptions,
             else:
                 trajs[(run.scenario.name, run.method.label)] = traj
         reused = len(runs) - len(todo)
-        # references first: every engine run is evaluated (and stored) as it finishes
-        todo.sort(key=lambda r: not r.method.is_reference)
-        results: dict[tuple[str, str], RunResult] = {}
 
-        def limit(job: Job) -> float:
-            return opts.timeout if opts.timeout else default_timeout(job.scenario)
-
-        def evaluate(run: PlannedRun, traj: Trajectory, *, record: bool) -> None:
+        def finished(run: PlannedRun, traj: Trajectory, *, record: bool) -> None:
             ref = trajs.get((run.scenario.name, REFERENCE))
-            m = evaluate_run(
-                run.scenario, traj, ref, is_reference=run.method.is_reference,
-                settings_hash=_settings_hash(run.method), scenario_hash=scenario_hash(run.scenario),
-                engine_version=traj.engine_version or versions.get(run.method.engine, ""))
+            m = measure(run.scenario, run.method, traj, ref,
+                        engine_version=versions[run.method.engine])
             res = RunResult(run.scenario, run.method, m, run.trajectory)
             results[res.key] = res
-            if record and store is not None:
-                store.record(run.scenario, run.method, traj, m, kind=KIND, suite=opts.suite,
-                             trajectory=str((out / run.trajectory).resolve()))
+            if record:
+                record_run(store, run.scenario, run.method, traj, m, kind=KIND,
+                           suite=opts.suite, trajectory=str((out / run.trajectory).resolve()))
 
-        jobs = [r.job for r in todo]
-        by_job = {id(job): run for job, run in zip(jobs, todo, strict=True)}
-        pending: dict[str, list[tuple[PlannedRun, Trajectory]]] = {}
-        cm = progress(len(todo), "compare") if progress else contextlib.nullcontext(None)
+        ref_runs = [r for r in todo if r.method.is_reference]
+        engine_runs = [r for r in todo if not r.method.is_reference]
+        refs, _ = references([r.scenario for r in ref_runs], store, execution=opts.execution)
+        for run in ref_runs:
+            traj = refs[run.scenario.name] or Trajectory.failed(
+                Status.UNSUPPORTED, NO_MODEL, n_blocks=run.scenario.n_blocks,
+                engine=REFERENCE, scenario=run.scenario.name)
+            _save(out, run, traj)
+            trajs[(run.scenario.name, REFERENCE)] = traj
+            finished(run, traj, record=True)
+        jobs = [r.job for r in engine_runs]
+        by_job = {id(job): run for job, run in zip(jobs, engine_runs, strict=True)}
+        cm = progress(len(jobs), "compare") if progress else contextlib.nullcontext(None)
         with cm as bar:
             def on_result(job: Job, traj: Trajectory) -> None:
                 run = by_job[id(job)]
                 _save(out, run, traj)
-                name = run.scenario.name
-                trajs[(name, run.method.label)] = traj
-                if run.method.is_reference:
-                    evaluate(run, traj, record=True)
-                    for waiting, t in pending.pop(name, []):
-                        evaluate(waiting, t, record=True)
-                elif (name, REFERENCE) in trajs:
-                    evaluate(run, traj, record=True)
-                else:  # its reference is still running
-                    pending.setdefault(name, []).append((run, traj))
+                trajs[(run.scenario.name, run.method.label)] = traj
+                finished(run, traj, record=True)
                 if bar is not None:
-                    bar.advance(f"{name} {run.method.label} {traj.status}")
+                    bar.advance(f"{run.scenario.name} {run.method.label} {traj.status}")
 
             if jobs:
-                run_jobs(jobs, opts.execution, on_result=on_result, timeout_of=limit)
-        for waiting in pending.values():
-            for run, t in waiting:
-                evaluate(run, t, record=True)
+                run_jobs(jobs, opts.execution, on_result=on_result, timeout_of=_limit(opts))
         for run in runs:  # reused runs, evaluated against the (possibly reused) reference
             key = (run.scenario.name, run.method.label)
             if key not in results and key in trajs:
-                evaluate(run, trajs[key], record=False)
+                finished(run, trajs[key], record=False)
     ordered = [results[(r.scenario.name, r.method.label)] for r in runs
                if (r.scenario.name, r.method.label) in results]
     return CompareResult(options=opts, runs=runs, results=ordered, trajectories=trajs,
@@ -307,9 +303,11 @@ def run_comparison(opts: CompareOptions,
                          wall_time=time.perf_counter() - start)
 
 
-def _settings_hash(method: Method) -> str:
-    s = method.settings
-    return engine_class(method.engine).settings(s.pop("preset", None), **s).digest()
+def _limit(opts: CompareOptions) -> Callable[[Job], float]:
+    """Each run's time limit: ``opts.timeout``, else :func:`default_timeout` of its scenario."""
+    def limit(job: Job) -> float:
+        return opts.timeout if opts.timeout else default_timeout(job.scenario)
+    return limit
 
 
 def _save(out: Path, run: PlannedRun, traj: Trajectory) -> None:
@@ -317,7 +315,7 @@ def _save(out: Path, run: PlannedRun, traj: Trajectory) -> None:
     # the file of a method is reused by later runs with other overrides: the hash
     # tells --resume whose trajectory it holds
     traj.extra = {**traj.extra, "method": run.method.label, "variation": run.method.variation,
-                  "settings_hash": _settings_hash(run.method)}
+                  "settings_hash": settings_hash(run.method)}
     traj.save(out / run.trajectory, scenario=scenario_to_dict(run.scenario))
 
 
@@ -332,7 +330,7 @@ def _stored(store: Store | None, run: PlannedRun, out: Path,
         return None
     path = Path(rec.trajectory) if rec.trajectory else out / run.trajectory
     traj = load_trajectory(path)
-    if traj is None or traj.extra.get("settings_hash") != _settings_hash(run.method):
+    if traj is None or traj.extra.get("settings_hash") != settings_hash(run.method):
         return None
     if path.resolve() != (out / run.trajectory).resolve():  # resumed into another folder
         _save(out, run, traj)

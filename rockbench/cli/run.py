@@ -1,0 +1,109 @@
+"""``rockbench run``: one scenario on engines and the analytic reference."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from rockbench.cli.common import (
+    Progress,
+    add_engine_arguments,
+    engine_settings,
+    execution_options,
+    selected_engines,
+)
+from rockbench.errors import RockbenchError
+
+__all__ = ["COMMANDS", "configure_run", "execute_run"]
+
+#: The commands of this module: name → one-line help.
+COMMANDS = {"run": "run one scenario on engines and the analytic reference"}
+
+
+def configure_run(p: argparse.ArgumentParser) -> None:
+    """Options of ``rockbench run``."""
+    p.add_argument("scenario", help="catalog name or scenario .toml file")
+    add_engine_arguments(p, default="analytic")
+    p.add_argument("--out", "-o", default=None, metavar="FILE",
+                   help="write trajectories (.csv or .npz, + .json sidecar); with several "
+                        "engines the engine name is appended to the file stem")
+    from rockbench.runner import DEFAULT_TIMEOUT
+
+    p.add_argument("--timeout", type=float, default=DEFAULT_TIMEOUT, metavar="S",
+                   help=f"wall-time limit per engine run in s (default: {DEFAULT_TIMEOUT:g})")
+    p.add_argument("--no-isolate", action="store_true",
+                   help="run engines in this process (no crash/hang protection)")
+
+
+def _out_path(out: str, engine: str, several: bool) -> Path:
+    path = Path(out)
+    if path.suffix not in (".csv", ".npz"):
+        raise RockbenchError(f"--out must end in .csv or .npz, got {out!r}")
+    return path.with_name(f"{path.stem}-{engine}{path.suffix}") if several else path
+
+
+def execute_run(args: argparse.Namespace) -> int:
+    """Run the engines (and the reference), print a table, write trajectories if asked."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from rockbench import analytic
+    from rockbench.evaluation import evaluate_run
+    from rockbench.runner import Job, run_jobs
+    from rockbench.scenarios import get_scenario, scenario_to_dict
+
+    execution = execution_options(args, isolate=not args.no_isolate)
+    scenario = get_scenario(args.scenario)
+    engines = selected_engines(args.engine)
+    settings = engine_settings(args, engines)
+    if args.out:
+        for e in engines:
+            _out_path(args.out, e, len(engines) > 1)
+    has_ref = analytic.has_reference(scenario)
+    if has_ref and "analytic" not in engines:
+        engines_run = ["analytic", *engines]
+        settings["analytic"] = {}
+    else:
+        engines_run = engines
+    jobs = [Job(scenario, e, settings[e]) for e in engines_run]
+    written: list[str] = []
+
+    def save(job: Job, traj: object) -> None:
+        if args.out and job.engine in engines:
+            path = _out_path(args.out, job.engine, len(engines) > 1)
+            traj.save(path, scenario=scenario_to_dict(scenario))  # type: ignore[attr-defined]
+            written.append(str(path))
+
+    with Progress(len(jobs), scenario.name) as bar:
+        def on_result(job: Job, traj: object) -> None:
+            save(job, traj)
+            bar.advance(job.engine)
+
+        trajs = run_jobs(jobs, execution, on_result=on_result)
+    by_engine = dict(zip(engines_run, trajs, strict=True))
+    ref = by_engine.get("analytic") if has_ref else None
+    lam = scenario.critical_angle
+    table = Table(title=f"{scenario.name}  (λ = {lam:.4f} rad)")
+    table.add_column("engine")
+    table.add_column("status")
+    for i in range(scenario.n_blocks):
+        table.add_column(f"max|θ{i + 1}|/λ", justify="right")
+    table.add_column("max|Δθ|/λ vs analytic", justify="right")
+    table.add_column("wall (s)", justify="right")
+    table.add_column("note")
+    for name, traj in by_engine.items():
+        if name == "analytic" and name not in engines:
+            label = "analytic (reference)"
+        else:
+            label = name
+        m = evaluate_run(scenario, traj, ref, is_reference=traj is ref)
+        table.add_row(label, str(traj.status), *[_fmt(p) for p in m.peaks],
+                      _fmt(m.max_error), f"{m.wall_time:.3f}", traj.message)
+    Console(width=140).print(table)
+    for w in written:
+        print(f"wrote {w}")
+    return 0
+
+
+def _fmt(x: float | None) -> str:
+    return "-" if x is None else f"{x:.4f}"
