@@ -35,8 +35,9 @@ computed anywhere else. Definitions (angles normalised by the scenario's λ):
 from __future__ import annotations
 
 import math
+import typing
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, fields
+from dataclasses import MISSING, asdict, dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -236,26 +237,72 @@ class RunMetrics:
         return out
 
     @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> RunMetrics:
-        """Inverse of :meth:`to_json` (unknown keys ignored, missing ones defaulted).
+    def from_json(cls, data: Any, *, where: str = "metrics") -> RunMetrics:
+        """Inverse of :meth:`to_json`, with every field's type checked (no coercion).
+
+        Unknown keys are ignored and fields with defaults may be missing.
 
         Raises
         ------
         ValueError
-            A status that is not one of :class:`Status`, or a missing required field.
+            Not a table, a missing required field, or a value of the wrong type;
+            the message names ``where`` and the field.
         """
-        names = {f.name for f in fields(cls)}
-        kw = {k: v for k, v in data.items() if k in names}
-        kw["status"] = Status(kw["status"])
-        ref = kw.get("reference_status")
-        kw["reference_status"] = None if ref is None else Status(ref)
-        for k in ("peaks", "peak_errors", "impact_time_errors"):
-            if k in kw:
-                kw[k] = _floats(kw[k] or ())
+        if not isinstance(data, Mapping):
+            raise ValueError(f"{where} must be a table of run metrics")
+        missing = sorted(_REQUIRED - set(data))
+        if missing:
+            raise ValueError(f"{where}.{missing[0]} is missing")
+        kw = {}
+        for name, hint in _HINTS.items():
+            if name in data:
+                kw[name] = _checked(data[name], hint, f"{where}.{name}")
+        return cls(**kw)
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _checked(value: Any, hint: Any, where: str) -> Any:
+    """One JSON value as a :class:`RunMetrics` field of type ``hint`` (no coercion)."""
+    args = typing.get_args(hint)
+    optional = type(None) in args
+    if value is None:
+        if optional:
+            return None
+        raise ValueError(f"{where} must not be null")
+    base = next((a for a in args if a is not type(None)), hint) if optional else hint
+    if typing.get_origin(base) is tuple:
+        if not isinstance(value, list):
+            raise ValueError(f"{where} must be a list of numbers or nulls, got {value!r}")
+        for i, v in enumerate(value):
+            if v is not None and not _is_number(v):
+                raise ValueError(f"{where}[{i}] must be a number or null, got {v!r}")
+        return _floats(value)
+    if base is Status:
         try:
-            return cls(**kw)
-        except TypeError as exc:
-            raise ValueError(f"incomplete run metrics: {exc}") from None
+            return Status(value)
+        except ValueError:
+            raise ValueError(f"{where} must be one of {', '.join(s.value for s in Status)}, "
+                             f"got {value!r}") from None
+    if base is str:
+        if not isinstance(value, str):
+            raise ValueError(f"{where} must be a string, got {value!r}")
+        return value
+    if base is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ValueError(f"{where} must be an integer, got {value!r}")
+        return value
+    if not _is_number(value):
+        raise ValueError(f"{where} must be a number{' or null' if optional else ''}, "
+                         f"got {value!r}")
+    return float(value)
+
+
+_HINTS = typing.get_type_hints(RunMetrics)
+_REQUIRED = {f.name for f in fields(RunMetrics)
+             if f.default is MISSING and f.default_factory is MISSING}
 
 
 #: Scalar metrics that tolerance and baseline files may name.

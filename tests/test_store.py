@@ -254,3 +254,24 @@ def test_resume_and_history_through_the_cli(tmp_path: Path,
     assert "tiny-0 on fault: 1 run(s)" in out and "compare" in out
     assert main(["history", "--db", db]) == 0
     assert "compare,matrix" in capsys.readouterr().out
+
+
+def test_stored_metrics_are_type_checked() -> None:
+    """RunMetrics read back from JSON (store rows, baselines) are checked, never coerced."""
+    from rockbench.evaluation import RunMetrics
+
+    good = {"status": "ok", "message": "", "n_blocks": 1, "critical_angle": 0.2,
+            "duration": 1.0, "peaks": [0.5], "simulated_time": 1.0, "n_samples": 11,
+            "wall_time": 0.1, "cpu_time": None, "realtime_factor": 10.0,
+            "time_to_rest": None, "max_wobble": 0.0, "slide": None}
+    m = RunMetrics.from_json(good)
+    assert m.peaks == (0.5,) and m.status is Status.OK
+    assert RunMetrics.from_json(m.to_json()) == m
+    for key, bad, needle in (("peaks", ["0.5"], "peaks[0] must be a number"),
+                             ("wall_time", "0.1", "wall_time must be a number"),
+                             ("n_samples", True, "n_samples must be an integer"),
+                             ("status", "fine", "status must be one of")):
+        with pytest.raises(ValueError, match=needle.replace("[", r"\[")):
+            RunMetrics.from_json({**good, key: bad})
+    with pytest.raises(ValueError, match="critical_angle is missing"):
+        RunMetrics.from_json({k: v for k, v in good.items() if k != "critical_angle"})

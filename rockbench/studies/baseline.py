@@ -16,9 +16,8 @@ from __future__ import annotations
 import json
 import os
 import tempfile
-import typing
 from collections.abc import Mapping
-from dataclasses import MISSING, dataclass, field, fields
+from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
@@ -89,57 +88,11 @@ def write_baseline(data: Mapping[str, Any], path: str | Path) -> Path:
 
 
 # ---------------------------------------------------------------------- reading
-def _is_number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
-
-
-def _check_value(value: Any, hint: Any, where: str) -> None:
-    """Check one JSON value against a :class:`RunMetrics` field type (no coercion)."""
-    args = typing.get_args(hint)
-    optional = type(None) in args
-    if value is None:
-        if optional:
-            return
-        raise BaselineError(f"{where} must not be null")
-    base = next((a for a in args if a is not type(None)), hint) if optional else hint
-    origin = typing.get_origin(base)
-    if origin is tuple:
-        if not isinstance(value, list):
-            raise BaselineError(f"{where} must be a list of numbers or nulls, got {value!r}")
-        for i, v in enumerate(value):
-            if v is not None and not _is_number(v):
-                raise BaselineError(f"{where}[{i}] must be a number or null, got {v!r}")
-    elif base is Status:
-        if value not in _STATUSES:
-            raise BaselineError(f"{where} must be one of {', '.join(sorted(_STATUSES))}, "
-                                f"got {value!r}")
-    elif base is str:
-        if not isinstance(value, str):
-            raise BaselineError(f"{where} must be a string, got {value!r}")
-    elif base is int:
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise BaselineError(f"{where} must be an integer, got {value!r}")
-    elif base is float:
-        if not _is_number(value):
-            raise BaselineError(f"{where} must be a number{' or null' if optional else ''}, "
-                                f"got {value!r}")
-
-
-_HINTS = typing.get_type_hints(RunMetrics)
-_REQUIRED = {f.name for f in fields(RunMetrics)
-             if f.default is MISSING and f.default_factory is MISSING}
-
-
 def _metrics(data: Any, where: str) -> RunMetrics:
-    if not isinstance(data, Mapping):
-        raise BaselineError(f"{where} must be a table of run metrics")
-    missing = sorted(_REQUIRED - set(data))
-    if missing:
-        raise BaselineError(f"{where}.{missing[0]} is missing")
-    for name, value in data.items():
-        if name in _HINTS:
-            _check_value(value, _HINTS[name], f"{where}.{name}")
-    return RunMetrics.from_json(data)
+    try:
+        return RunMetrics.from_json(data, where=where)
+    except ValueError as exc:
+        raise BaselineError(str(exc)) from None
 
 
 def load_baseline(path: str | Path) -> Baseline:
