@@ -7,12 +7,15 @@ prints Markdown tables: max |θ − θ_ref| / λ (until the reference comes to r
 relative errors of the first three impact times, the largest out-of-plane
 wobble, the pulse peak ratio and wall times. It ends with the worst free-rocking
 error, the worst impact-time error and the worst pulse-peak deviation of each
-preset, the figures of the engine table.
+preset, the figures of the engine table. Unless ``--no-overhead``, it also times
+the plugin's hooks against a raw bpy loop (``scene.frame_set`` and
+``matrix_world`` per frame) on B0.
 
 Usage::
 
     python benchmarks/calibrate_blender.py [--preset accurate,fast,paper]
         [--set knob=value ...] [--only free|pulse] [--duration 20] [--cases substr,...]
+        [--no-overhead]
 
 The reference is ``rockbench.analytic.housner.single_block_reference``.
 """
@@ -21,10 +24,13 @@ from __future__ import annotations
 
 import math
 import sys
+import time
+from typing import Any
 
 import numpy as np
 
 from rockbench.engines.blender_engine import BlenderEngine
+from rockbench.scenarios import Scenario
 
 try:
     from benchmarks import calibration as cal
@@ -53,8 +59,32 @@ def summary(free: list[dict], pulses: list[dict]) -> str:
     return "; ".join(parts)
 
 
+def raw_loop(engine: BlenderEngine, scenario: Scenario, settings: Any, dt: float,
+             k: int) -> float:
+    """Wall time of a bare bpy loop on the plugin's scene: k frames, then one pose read.
+
+    Timed like :func:`calibration.hooks_loop`: from the scene's build (a factory
+    reset and a few operators, a large part of a short run) to its teardown.
+    """
+    t0 = time.perf_counter()
+    engine._build(scenario, settings)
+    scene, ob = engine._scene, engine._blocks[0]
+    n_out = scenario.output_times().size
+    out = np.empty((n_out, 7))
+    frame = 1
+    for i in range(1, n_out):
+        for _ in range(k):
+            frame += 1
+            scene.frame_set(frame)
+        m = ob.matrix_world
+        q, p = m.to_quaternion(), m.translation
+        out[i] = (p.x, p.y, p.z, q.w, q.x, q.y, q.z)
+    engine._teardown()
+    return time.perf_counter() - t0
+
+
 def main(argv: list[str] | None = None) -> int:
-    ap = cal.parser(__doc__, overhead=False)
+    ap = cal.parser(__doc__)
     ap.set_defaults(preset="accurate,fast,paper")
     args = ap.parse_args(argv)
     engine = BlenderEngine()
@@ -73,6 +103,8 @@ def main(argv: list[str] | None = None) -> int:
                                lambda sc, s=s: cal.measure_pulse(engine, s, sc))
             print()
         print(f"{preset}: {summary(free, pulses)}\n", flush=True)
+        if not args.no_overhead:
+            cal.print_overhead("bpy", 5.0, cal.overhead(engine, s, 5.0, raw_loop))
     return 0
 
 

@@ -44,7 +44,30 @@ What Blender really does (measured with bpy 5.0.1, see tests/test_engine_blender
   at release: an energy gain the watchdog caught). Blender
   computes inertia from the collision shape: for hulls and meshes Bullet uses the
   shape's bounding box, i.e. the uncut box's inertia the analytic models also use.
-* Blender's Bullet is built in single precision (poses are float32).
+* **Split impulse** changes nothing measurable here (bit-identical runs): Bullet uses it
+  only for penetrations deeper than its threshold (−0.04 m), which rocking never reaches.
+* **Depsgraph order.** With the base location only set from Python, Blender sometimes
+  stepped the simulation before evaluating the base's new transform (two outcomes 8e-4
+  rad apart on a pulse, run to run); the view layer is therefore updated after each
+  placement, which makes driven runs bit-identical.
+* **Threads.** Blender loads files (``read_factory_settings`` too) only on the thread
+  that imported bpy; a worker forked from another thread (the runner's process pool)
+  crashes there, so it empties the scene through the data API (same trajectories to the
+  bit), and every operator gets its context explicitly.
+* Blender's matrices are float32: poses carry ~1e-7 relative rounding.
+
+Calibration (``benchmarks/calibrate_blender.py`` and ``rockbench compare --suite
+paper-free`` / ``paper-single-pulse``, bpy 5.0.1): ``accurate`` (Δt 0.1 ms) max
+|θ − θ_ref| ≤ 0.085 λ on B0–B3 over 20 s (B0 0.085, B1 0.07, B2 0.025, B3 0.012), first
+impacts within 0.15 %, later impacts within 0.3 % on B0 and B3 but up to 12 % early on
+the squat B1 (λ = 0.59), pulse peaks −0.46 to −0.10 %; ``fast`` (Δt 1 ms) ≤ 0.20 λ, pulse
+peaks −2.8 to −0.1 %. The project's targets (0.005 λ, impacts within 0.5 %) are out of
+reach: on B0 the error stays at 0.08–0.095 λ from Δt 0.1 ms down to 0.01 ms (0.11 λ at
+0.2 ms), iterations (10–1000), shapes, margins and restitution do not remove it, the blocks
+twist out of plane (yaw up to 0.16 rad) under Blender's friction pyramid. Its likely
+cause is what pybullet showed with its defaults (docs/engine-notes.md): Bullet keeps the
+lifted pivot's contact points while they are within the contact breaking threshold,
+0.02 × the block's bounding radius here (5 cm on B0), which Blender does not expose.
 """
 
 from __future__ import annotations
@@ -79,6 +102,8 @@ BLENDER_DEFAULTS: dict[str, Any] = {
 _BPY_HOME: list[int] = []
 
 _SHAPES = {"box": "BOX", "convex": "CONVEX_HULL", "mesh": "MESH"}
+#: Last frame Blender's scene and point cache accept (MAXFRAME).
+_MAX_FRAME = 1048574
 #: Mass of a motor-driven base per kg of blocks: contact impulses barely move it.
 _MOTOR_BASE_MASS = 1e4
 
@@ -187,7 +212,8 @@ class BlenderEngine(Engine):
         # the paper's Blender set-up as far as it is printed: box shapes, the middle
         # values of its Table 2 (100 iterations, 20 sub-steps, 1e-5 m margin) at its
         # highest rate, 240 fps (its 3.5 s per 20 s at 240 fps fits 20 sub-steps, not
-        # 200), Blender's default split impulse (off). Δt = 1/4800 s by Blender's rule.
+        # 200; and 2 sub-steps at 240 fps stop B0 at 10.4 s, the paper's 10–11 s),
+        # Blender's default split impulse (off). Δt = 1/4800 s by Blender's rule.
         "paper": {"fps": 240.0, "substeps_per_frame": 20, "solver_iterations": 100,
                   "use_split_impulse": False, "collision_shape": "box", "use_margin": True,
                   "collision_margin": 1e-5},
@@ -226,14 +252,17 @@ class BlenderEngine(Engine):
         if s.collision_shape == "mesh" and scenario.n_blocks > 1:
             raise UnsupportedScenario("blender: collision_shape='mesh' models single blocks "
                                       "only (two concave meshes do not collide in Bullet)")
+        frame = 1.0 / s.fps
+        n_frames = int(math.ceil(scenario.duration / frame - 1e-9)) + 2
+        if 1 + n_frames > _MAX_FRAME:
+            raise UnsupportedScenario(f"blender: {scenario.duration:g} s at {s.fps:g} fps is "
+                                      f"more than Blender's {_MAX_FRAME} frames")
         bpy = self._bpy = self.library("bpy")
         _empty_scene(bpy)
         scene = self._scene = bpy.context.scene
         # FPS = fps / fps_base: an integer fps (Blender's field) and a float base
         scene.render.fps = max(1, math.ceil(s.fps - 1e-9))
         scene.render.fps_base = scene.render.fps / s.fps
-        frame = 1.0 / s.fps
-        n_frames = int(math.ceil(scenario.duration / frame - 1e-9)) + 2
         scene.frame_start, scene.frame_end = 1, 1 + n_frames
         scene.frame_set(1)
         bpy.ops.rigidbody.world_add()
