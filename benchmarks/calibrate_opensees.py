@@ -1,0 +1,121 @@
+"""Calibrate the opensees engine's presets against the Housner reference.
+
+The knob that sets the energy an impact removes is the contact dashpots'
+damping ratio ζ (``damping_ratio``). ``--search`` documents how it was chosen:
+for each ζ of a grid it runs the four free-rocking blocks released from 0.5 λ
+(B0–B3) up to just past their third impact and prints the worst of
+max |θ − θ_ref| / λ and of the three impact-time errors; the preset takes the
+ζ with the smallest worst error. The usual tables then measure each preset on
+the catalog's free-rocking cases (B0 at 0.5 λ; B1, B2, B3 at 0.2, 0.5, 0.99 λ;
+20 s, 1 kHz output, friction 1, restitution 0), the six Single #2 one-sine
+pulses (4 s) and, with ``--stacks``, the paper's eight two-block pulses
+against the project's two-block analytic model. Each row also counts the steps
+taken with a fixed number of Newton iterations (see the engine's docstring).
+
+Usage::
+
+    python benchmarks/calibrate_opensees.py [--preset accurate,fast] [--set knob=value ...]
+        [--only free|pulse] [--duration 20] [--cases substr,...]
+        [--search 1.0,1.3,1.6] [--stacks]
+
+The reference is ``rockbench.analytic.housner.single_block_reference``.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import numpy as np
+
+from rockbench.analytic.housner import single_block_reference
+from rockbench.engines.opensees_engine import OpenseesEngine
+from rockbench.metrics import zero_crossings
+from rockbench.scenarios import get_scenario
+
+try:
+    from benchmarks import calibration as cal
+except ImportError:  # run as a file: python benchmarks/calibrate_opensees.py
+    import calibration as cal
+
+#: The free-rocking cases of the ζ search (each block from 0.5 λ).
+SEARCH_CASES = ["free-b0", "free-b1-0.5", "free-b2-0.5", "free-b3-0.5"]
+
+ENGINE = OpenseesEngine()
+# a row is printed as soon as it is measured: the engine's count is that run's
+UNCONVERGED = cal.col("fixed-iteration steps", lambda r: ENGINE.unconverged_steps, "d")
+FREE_COLS = [*cal.CASE, cal.col("max err/λ (to rest)", "err", ".4f"),
+             *cal.impact_cols(("+.3f", "+.3f", "+.3f"), "impact {} err %"), UNCONVERGED,
+             cal.WALL_S, cal.CPU]
+PULSE_COLS = [cal.col("pulse", "case"), cal.col("status", "status"),
+              cal.col("max θ/λ engine", "peak", ".4f"), cal.col("max θ/λ ref", "peak_ref", ".4f"),
+              cal.ratio_col("+.2f"), UNCONVERGED, cal.WALL_S, cal.CPU]
+
+
+def search(zetas: list[float], overrides: dict, preset: str) -> None:
+    """The ζ grid on B0–B3 up to their third impact (module docstring)."""
+    print(f"### ζ search, preset `{preset}`, overrides {overrides or 'none'}\n")
+    print("| ζ | " + " | ".join(f"{c}: err/λ, impacts %" for c in SEARCH_CASES) + " | worst |")
+    print("|---|" + "---|" * (len(SEARCH_CASES) + 1))
+    for zeta in zetas:
+        s = OpenseesEngine.settings(preset, **overrides).replace(damping_ratio=zeta)
+        cells, worst = [], 0.0
+        for name in SEARCH_CASES:
+            sc0 = get_scenario(name)
+            ref = single_block_reference(sc0)
+            imp = np.asarray(ref.impacts)[:3]
+            sc = sc0.replace(duration=float(imp[-1]) + 0.05)
+            tr = ENGINE.simulate(sc, s)
+            th = tr.theta[:, 0]
+            n = min(th.size, ref.theta.shape[0])
+            err = float(np.max(np.abs(th[:n] - ref.theta[:n, 0]))) / sc.critical_angle
+            zc = zero_crossings(tr.t, th)[:3]
+            rel = [100 * (zc[k] - imp[k]) / imp[k] if k < zc.size else math.nan
+                   for k in range(3)]
+            worst = max(worst, err / 0.005, *(abs(r) / 0.5 for r in rel))
+            cells.append(f"{err:.4f}, " + "/".join(f"{r:+.2f}" for r in rel))
+        # worst: the largest error as a fraction of its bound (0.005 λ, 0.5 %)
+        print(f"| {zeta:g} | " + " | ".join(cells) + f" | {worst:.2f} |", flush=True)
+    print()
+
+
+def run_stacks(settings: object) -> None:
+    """The paper's two-block pulses: peaks of both blocks / λ against the analytic model."""
+    from rockbench.analytic import reference
+    from rockbench.scenarios.catalog import get_suite
+
+    print("| stack pulse | status | top engine | top analytic | bottom engine "
+          "| bottom analytic | wall s |")
+    print("|---|---|---|---|---|---|---|")
+    for name in get_suite("paper-stack-pulse"):
+        sc = get_scenario(name)
+        lam = sc.critical_angle
+        tr = ENGINE.simulate(sc, settings)
+        pk = np.max(np.abs(tr.theta), axis=0) / lam
+        ref = reference(sc)
+        rk = np.max(np.abs(ref.theta), axis=0) / lam
+        note = "" if str(ref.status) == "ok" else f" ({ref.status})"
+        print(f"| {name} | {tr.status} | {pk[1]:.3f} | {rk[1]:.3f}{note} | {pk[0]:.3f} | "
+              f"{rk[0]:.3f} | {tr.wall_time:.1f} |", flush=True)
+    print()
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = cal.parser(__doc__, overhead=False)
+    ap.add_argument("--search", default="", help="comma list of ζ to search (B0–B3)")
+    ap.add_argument("--stacks", action="store_true", help="also the two-block pulses")
+    args = ap.parse_args(argv)
+    if args.search:
+        for preset in args.preset.split(","):
+            search([float(z) for z in args.search.split(",")], cal.overrides(args), preset)
+        return 0
+    code = cal.run(args, ENGINE, "opensees", FREE_COLS, PULSE_COLS, total=True)
+    if args.stacks:
+        for preset in args.preset.split(","):
+            print(f"### two-block pulses, preset `{preset}`\n")
+            run_stacks(OpenseesEngine.settings(preset, **cal.overrides(args)))
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

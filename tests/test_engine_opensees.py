@@ -1,0 +1,183 @@
+"""Physics tests of the opensees engine plugin (OpenSeesPy) against Housner and closed forms."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rockbench.engines.opensees_engine import OpenseesEngine, OpenseesSettings
+from rockbench.engines.settings import SettingsError
+from rockbench.errors import EngineUnavailable
+from rockbench.scenarios import Block, Contact, Scenario, SinePulse, Stack
+
+try:
+    OpenseesEngine.check_available()
+except EngineUnavailable as exc:  # pragma: no cover - depends on the environment
+    pytest.skip(str(exc), allow_module_level=True)
+
+from engine_helpers import (  # noqa: E402
+    B2,
+    PAPER_STACK,
+    SINGLE2,
+    check_b2_free_rocking_accurate,
+    check_base_follows_excitation,
+    check_paper_stack_under_pulse_runs,
+    check_sine_pulse_peak,
+)
+
+from rockbench.trajectory import Status  # noqa: E402
+
+
+# ---------------------------------------------------------------- Housner
+def test_b2_free_rocking_accurate() -> None:
+    """θ within 5e-3 λ of Housner and the first three impact times within 0.5 %."""
+    tr = check_b2_free_rocking_accurate(OpenseesEngine())
+    # a planar engine: no wobble, and θ starts at the requested tilt
+    assert np.all(tr.wobble == 0.0)
+    assert tr.theta[0, 0] == pytest.approx(0.5 * B2.rocking().lam, rel=1e-12)
+
+
+def test_single_pulse_peak_accurate() -> None:
+    """Single #2 under the 3.3 Hz / 8 mm pulse: peak within 2 %, tipping away from ü_g."""
+    check_sine_pulse_peak(OpenseesEngine(), "accurate")
+
+
+def test_sign_convention_and_mirror_symmetry() -> None:
+    """θ > 0 pivots on the +x corner (centroid toward +x); −tilt mirrors it exactly."""
+    sc = Scenario("free", B2, initial_tilt=0.5, duration=0.4)
+    pos = OpenseesEngine().simulate(sc, "fast")
+    neg = OpenseesEngine().simulate(sc.replace(initial_tilt=-0.5), "fast")
+    assert pos.status is Status.OK and neg.status is Status.OK
+    assert pos.theta[0, 0] > 0 and pos.x[0, 0] > 0
+    np.testing.assert_allclose(neg.theta, -pos.theta, atol=1e-9)
+    np.testing.assert_allclose(neg.x, -pos.x, atol=1e-9)
+    np.testing.assert_allclose(neg.z, pos.z, atol=1e-9)
+
+
+# ---------------------------------------------------------------- base motion
+def test_base_ends_where_the_excitation_left_it() -> None:
+    check_base_follows_excitation(OpenseesEngine(), "fast", abs_tol=1e-12)
+
+
+def test_block_rides_with_the_base_below_uplift() -> None:
+    """At 0.8 × g tan λ the block does not rock and follows u_g(t) at every sample.
+
+    The contact is compliant: under m ü_g the shear springs deflect by
+    |ü_g| / ω_c² (ω_c = 2π f_c) and the pair of corner springs (rotational
+    stiffness m ω_c² b²) tilts the block elastically by |ü_g| h / (ω_c² b²),
+    which moves the centroid by h times that. The block starts from the exact
+    static settlement g / ω_c² and keeps it.
+    """
+    lam = SINGLE2.rocking().lam
+    f = 3.0
+    amp = 0.8 * 9.81 * math.tan(lam) / (2 * math.pi * f) ** 2
+    exc = SinePulse(f, amp)
+    sc = Scenario("ride", SINGLE2, excitation=exc, duration=0.5)
+    s = OpenseesEngine.settings("fast")
+    assert s.springs == 2
+    tr = OpenseesEngine().simulate(sc, s)
+    assert tr.status is Status.OK
+    omega2 = (2 * math.pi * s.contact_frequency) ** 2
+    a_max = amp * (2 * math.pi * f) ** 2
+    b, h = SINGLE2.pivot_half_width, SINGLE2.h
+    tilt = a_max * h / (omega2 * b * b)
+    assert 0.5 * tilt < np.max(np.abs(tr.theta)) <= 1.1 * tilt
+    rel = tr.x[:, 0] - exc.displacement(tr.t)
+    assert np.max(np.abs(rel)) <= 1.1 * (a_max / omega2 + h * tilt)
+    np.testing.assert_allclose(tr.z[0, 0], SINGLE2.h - sc.g / omega2, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(tr.z[:, 0], tr.z[0, 0], rtol=0, atol=b * tilt)
+
+
+def test_frictionless_base_slides_under_block() -> None:
+    """Friction comes from the scenario: with μ = 0 the moving base cannot drag the block."""
+    sc = Scenario("slide", SINGLE2, Contact(0.0, 0.0), SinePulse(3.0, 0.004), duration=0.4)
+    tr = OpenseesEngine().simulate(sc, "fast")
+    assert tr.status is Status.OK
+    # the base travels 2πA = 25 mm; the block stays put
+    assert np.max(np.abs(tr.x[:, 0])) < 1e-4
+    assert np.max(np.abs(tr.theta[:, 0])) < 1e-5
+
+
+# ---------------------------------------------------------------- stacks
+def test_stack_at_rest_stays_at_rest_on_its_static_settlement() -> None:
+    """Each interface is compressed by the weight it carries, K = M ω_c², and stays so."""
+    sc = Scenario("rest", PAPER_STACK, duration=1.0)
+    s = OpenseesEngine.settings()
+    tr = OpenseesEngine().simulate(sc, s)
+    assert tr.status is Status.OK
+    assert np.max(np.abs(tr.theta)) < 1e-9
+    np.testing.assert_allclose(tr.x, 0.0, atol=1e-9)
+    sink = sc.g / (2 * math.pi * s.contact_frequency) ** 2  # per interface
+    np.testing.assert_allclose(tr.z[0], PAPER_STACK.centroids[:, 1] - [sink, 2 * sink],
+                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(tr.z, tr.z[0] + 0 * tr.z, rtol=0, atol=1e-9)
+
+
+def test_paper_stack_under_pulse_runs() -> None:
+    check_paper_stack_under_pulse_runs(OpenseesEngine())
+
+
+# ---------------------------------------------------------------- model and settings
+def test_interfaces_span_the_pivots_with_the_interface_stiffness() -> None:
+    """Points from pivot to pivot, end points half-weighted, Σk = M ω_c² per interface."""
+    sc = Scenario("stack", PAPER_STACK, duration=0.1)
+    s = OpenseesEngine.settings(None, springs=7)
+    faces = OpenseesEngine.interfaces(sc, s)
+    omega2 = (2 * math.pi * s.contact_frequency) ** 2
+    bottom, top = PAPER_STACK.blocks
+    assert [f.x.size for f in faces] == [7, 7]
+    np.testing.assert_allclose(faces[0].x[[0, -1]], [-bottom.pivot_half_width,
+                                                     bottom.pivot_half_width])
+    bc = min(bottom.pivot_half_width, top.pivot_half_width)
+    np.testing.assert_allclose(faces[1].x[[0, -1]], [-bc, bc])
+    assert faces[1].z == pytest.approx(bottom.height)
+    assert faces[0].k.sum() == pytest.approx((bottom.m + top.m) * omega2)
+    assert faces[1].k.sum() == pytest.approx(top.m * omega2)
+    assert faces[0].k[0] == pytest.approx(0.5 * faces[0].k[1])
+    np.testing.assert_allclose(np.diff(faces[0].x), np.diff(faces[0].x)[0])
+
+
+def test_restitution_is_unsupported() -> None:
+    sc = Scenario("bounce", B2, Contact(1.0, 0.5), initial_tilt=0.5, duration=0.1)
+    tr = OpenseesEngine().simulate(sc)
+    assert tr.status is Status.UNSUPPORTED and "restitution" in tr.message
+
+
+def test_settings_and_presets() -> None:
+    s = OpenseesEngine.settings()
+    assert isinstance(s, OpenseesSettings)
+    assert s == OpenseesEngine.settings("accurate")
+    assert s.springs == 2  # Housner's point impacts: one contact point at each pivot
+    assert OpenseesEngine.settings("winkler").springs >= 10  # the literature's minimum
+    assert OpenseesEngine.settings("fast").timestep > s.timestep
+    assert OpenseesEngine.settings(None, springs="12").springs == 12
+    for bad in (dict(springs=1), dict(alpha=0.5), dict(timestep=0.0), dict(integrator="rk4"),
+                dict(substeps=3)):
+        with pytest.raises(SettingsError):
+            OpenseesEngine.settings(None, **bad)
+    assert OpenseesEngine.version().startswith("3.")
+    assert OpenseesEngine.capabilities.dimensions == 2
+
+
+def test_hht_and_timestep_knobs_take_effect() -> None:
+    sc = Scenario("free", B2, initial_tilt=0.5, duration=0.6)
+    a = OpenseesEngine().simulate(sc, "fast")
+    b = OpenseesEngine().simulate(sc, {"preset": "fast", "integrator": "hht", "alpha": 0.8})
+    c = OpenseesEngine().simulate(sc, {"preset": "fast", "timestep": 2.5e-4})
+    assert a.settings["effective_timestep"] == pytest.approx(5e-4)
+    assert c.settings["effective_timestep"] == pytest.approx(2.5e-4)
+    for other in (b, c):
+        assert other.status is Status.OK
+        assert 1e-6 < np.max(np.abs(a.theta - other.theta)) < 0.05 * sc.critical_angle
+
+
+def test_model_is_wiped_between_runs() -> None:
+    """OpenSees keeps one global model: a run after another gives the same result."""
+    sc = Scenario("free", Block(0.5, 0.2, 1.0, mass=1.0), initial_tilt=0.3, duration=0.3)
+    engine = OpenseesEngine()
+    first = engine.simulate(sc, "fast")
+    engine.simulate(Scenario("stack", Stack(PAPER_STACK.blocks), duration=0.1), "fast")
+    again = engine.simulate(sc, "fast")
+    np.testing.assert_array_equal(first.theta, again.theta)
