@@ -21,12 +21,9 @@ from rockbench.evaluation import RunResult
 from rockbench.method import REFERENCE, Method, slug
 from rockbench.report.comparison import (
     Context,
-    error_table,
-    free_tables,
+    group_tables,
     overview_table,
-    paper_experiment_table,
     paper_findings,
-    peak_tables,
     timing_table,
 )
 from rockbench.report.document import (
@@ -171,15 +168,7 @@ def _write_document(result: CompareResult, start: float | None) -> list[Path]:
     for group, scen in groups.items():
         sec = Section(f"group-{group}", group_title(group))
         sec.paragraphs.append(_group_intro(group, scen))
-        if group == "free":
-            sec.items += free_tables(ctx, scen)
-        else:
-            sec.items += peak_tables(ctx, group, scen)
-            if ctx.engines:
-                sec.items.append(error_table(ctx, group, scen))
-            exp = paper_experiment_table(ctx, scen) if group == "single-sine" else None
-            if exp is not None:
-                sec.items.append(exp)
+        sec.items += group_tables(ctx, group, scen)
         found = paper_findings(group, scen)
         if found is not None:
             sec.items.append(Bullets(*found))

@@ -9,7 +9,7 @@ and cost (wall time, real-time factor, the paper's reported times).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -30,7 +30,8 @@ from rockbench.report.tables import (
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status
 
-__all__ = ["Context", "overview_table", "peak_tables", "error_table", "free_tables",
+__all__ = ["GROUP_TABLES", "group_table", "group_tables", "Context", "overview_table",
+           "peak_tables", "error_table", "free_tables",
            "timing_table", "paper_experiment_table", "paper_findings", "input_label",
            "fmt_impact"]
 
@@ -365,3 +366,43 @@ def paper_findings(group: str, scenarios: Sequence[Scenario]) -> tuple[str, list
     if summ.get("note"):
         items.append(summ["note"])
     return title, items
+
+
+# ---------------------------------------------------------------------- tables per group
+GroupTable = Callable[[Context, str, Sequence[Scenario]], list[Table]]
+#: The tables of a scenario group's section, in order (see :func:`group_table`).
+GROUP_TABLES: list[GroupTable] = []
+
+
+def group_table(make: GroupTable) -> GroupTable:
+    """Register a table of the group sections: ``make(ctx, group, scenarios)`` returns the
+    tables it draws for that group (none where it does not apply). Adding a table to the
+    report is writing one such function here."""
+    GROUP_TABLES.append(make)
+    return make
+
+
+def group_tables(ctx: Context, group: str, scenarios: Sequence[Scenario]) -> list[Table]:
+    """Every registered table of one group, in registration order."""
+    return [t for make in GROUP_TABLES for t in make(ctx, group, scenarios)]
+
+
+@group_table
+def _free(ctx: Context, group: str, scenarios: Sequence[Scenario]) -> list[Table]:
+    return free_tables(ctx, scenarios) if group == "free" else []
+
+
+@group_table
+def _peaks(ctx: Context, group: str, scenarios: Sequence[Scenario]) -> list[Table]:
+    return peak_tables(ctx, group, scenarios) if group != "free" else []
+
+
+@group_table
+def _errors(ctx: Context, group: str, scenarios: Sequence[Scenario]) -> list[Table]:
+    return [error_table(ctx, group, scenarios)] if group != "free" and ctx.engines else []
+
+
+@group_table
+def _experiment(ctx: Context, group: str, scenarios: Sequence[Scenario]) -> list[Table]:
+    t = paper_experiment_table(ctx, scenarios) if group == "single-sine" else None
+    return [t] if t is not None else []
