@@ -11,12 +11,14 @@ the catalog's free-rocking cases (B0 at 0.5 λ; B1, B2, B3 at 0.2, 0.5, 0.99 λ;
 pulses (4 s) and, with ``--stacks``, the paper's eight two-block pulses
 against the project's two-block analytic model. Each row also counts the steps
 taken with a fixed number of Newton iterations (see the engine's docstring).
+The overhead line compares ``simulate()`` and the plugin's hooks with a raw
+loop of ``analyze``/``nodeDisp`` calls on the same model (B0, free).
 
 Usage::
 
     python benchmarks/calibrate_opensees.py [--preset accurate,fast] [--set knob=value ...]
         [--only free|pulse] [--duration 20] [--cases substr,...]
-        [--search 1.0,1.3,1.6] [--stacks]
+        [--search 1.0,1.3,1.6] [--stacks] [--no-overhead]
 
 The reference is ``rockbench.analytic.housner.single_block_reference``.
 """
@@ -25,13 +27,15 @@ from __future__ import annotations
 
 import math
 import sys
+import time
+from typing import Any
 
 import numpy as np
 
 from rockbench.analytic.housner import single_block_reference
 from rockbench.engines.opensees_engine import OpenseesEngine
 from rockbench.metrics import zero_crossings
-from rockbench.scenarios import get_scenario
+from rockbench.scenarios import Scenario, get_scenario
 
 try:
     from benchmarks import calibration as cal
@@ -79,6 +83,24 @@ def search(zetas: list[float], overrides: dict, preset: str) -> None:
     print()
 
 
+def raw_loop(eng: OpenseesEngine, sc: Scenario, s: Any, dt: float, k: int) -> float:
+    """A minimal raw OpenSees loop on the adapter's model (``analyze`` k steps, read the
+    centroid node, per output sample); returns its wall time, model build included."""
+    ops = OpenseesEngine.library("openseespy.opensees")
+    n_out = sc.output_times().size
+    t0 = time.perf_counter()
+    eng._build(sc, s)
+    tag = eng._centroids[0]
+    out = np.empty((n_out, 3))
+    out[0] = ops.nodeDisp(tag)
+    for i in range(1, n_out):
+        ops.analyze(k, dt)
+        out[i] = ops.nodeDisp(tag)
+    elapsed = time.perf_counter() - t0
+    eng._teardown()
+    return elapsed
+
+
 def run_stacks(settings: object) -> None:
     """The paper's two-block pulses: peaks of both blocks / λ against the analytic model."""
     from rockbench.analytic import reference
@@ -101,7 +123,7 @@ def run_stacks(settings: object) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = cal.parser(__doc__, overhead=False)
+    ap = cal.parser(__doc__)
     ap.add_argument("--search", default="", help="comma list of ζ to search (B0–B3)")
     ap.add_argument("--stacks", action="store_true", help="also the two-block pulses")
     args = ap.parse_args(argv)
@@ -109,7 +131,9 @@ def main(argv: list[str] | None = None) -> int:
         for preset in args.preset.split(","):
             search([float(z) for z in args.search.split(",")], cal.overrides(args), preset)
         return 0
-    code = cal.run(args, ENGINE, "opensees", FREE_COLS, PULSE_COLS, total=True)
+    code = cal.run(args, ENGINE, "opensees", FREE_COLS, PULSE_COLS, total=True,
+                   overhead=lambda s, dur: cal.print_overhead(
+                       "OpenSees", dur, cal.overhead(OpenseesEngine(), s, dur, raw_loop)))
     if args.stacks:
         for preset in args.preset.split(","):
             print(f"### two-block pulses, preset `{preset}`\n")

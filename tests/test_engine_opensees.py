@@ -21,6 +21,7 @@ from engine_helpers import (  # noqa: E402
     B2,
     PAPER_STACK,
     SINGLE2,
+    check_b0_impact_times_accurate_and_fast,
     check_b2_free_rocking_accurate,
     check_base_follows_excitation,
     check_paper_stack_under_pulse_runs,
@@ -37,6 +38,11 @@ def test_b2_free_rocking_accurate() -> None:
     # a planar engine: no wobble, and θ starts at the requested tilt
     assert np.all(tr.wobble == 0.0)
     assert tr.theta[0, 0] == pytest.approx(0.5 * B2.rocking().lam, rel=1e-12)
+
+
+def test_b0_impact_times_accurate_and_fast() -> None:
+    """B0's published impact times within 0.5 % with both presets."""
+    check_b0_impact_times_accurate_and_fast(OpenseesEngine())
 
 
 def test_single_pulse_peak_accurate() -> None:

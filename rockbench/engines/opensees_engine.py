@@ -431,14 +431,11 @@ class OpenseesEngine(Engine):
         ops, dt = self._ops, self._dt
         target = self._step + n
         while self._step < target and not self._failed:
-            left = target - self._step
-            t_before = ops.getTime()
-            if ops.analyze(left, dt) == 0:
+            if ops.analyze(target - self._step, dt) == 0:
                 self._step = target
                 return
             # analyze stops at the first step that fails, after the last committed one
-            done = int(round((ops.getTime() - t_before) / dt))
-            self._step += done
+            self._step = int(round(ops.getTime() / dt))
             self._retry_step(ops, dt)
             self._step += 1
 
