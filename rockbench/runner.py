@@ -222,6 +222,30 @@ def _pool_job(job: Job) -> Trajectory:
         raise _portable(exc) from None
 
 
+def die_with_parent(parent: int) -> None:
+    """Make this (child) process die when its parent does, however the parent ends.
+
+    On Linux the kernel sends SIGKILL at the parent's death (``prctl``
+    ``PR_SET_PDEATHSIG``), so a hanging engine never outlives a study that was
+    killed (SIGTERM, SIGKILL, SIGHUP from a CI system or ``timeout``). A parent
+    already gone before the call ends the child at once. Elsewhere this does
+    nothing.
+
+    Parameters
+    ----------
+    parent : int
+        The parent's process id, taken in the parent.
+    """
+    if not sys.platform.startswith("linux"):
+        return
+    import ctypes
+
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    if os.getppid() != parent:  # the parent died before the request took hold
+        os._exit(1)
+
+
 def _context() -> multiprocessing.context.BaseContext:
     # fork keeps run-time registrations (e.g. test engines) visible in children
     methods = multiprocessing.get_all_start_methods()
@@ -366,7 +390,8 @@ def map_tasks(
         return timeout_of(i) if timeout_of is not None else ex.timeout
 
     pool = ProcessPool(max_workers=min(ex.jobs, len(tasks)), max_tasks=1 if fresh else 0,
-                       context=_context())
+                       context=_context(), initializer=die_with_parent,
+                       initargs=(os.getpid(),))
     try:
         futures = {pool.schedule(fn, args=(task,), timeout=limit(i)): i
                    for i, task in enumerate(tasks)}
@@ -433,7 +458,8 @@ def run_job_subprocess(job: Job, timeout: float | None = None,
                                             if p)
         start = time.perf_counter()
         try:
-            proc = subprocess.run([sys.executable, "-m", "rockbench.runner", str(src), str(dst)],
+            proc = subprocess.run([sys.executable, "-m", "rockbench.runner", str(src), str(dst),
+                                   str(os.getpid())],
                                   env=env, timeout=timeout, stdin=subprocess.DEVNULL,
                                   stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, check=False)
         except subprocess.TimeoutExpired:
@@ -450,8 +476,9 @@ def run_job_subprocess(job: Job, timeout: float | None = None,
     return payload
 
 
-def _child_main(src: str, dst: str) -> int:
+def _child_main(src: str, dst: str, parent: int) -> int:
     """Entry point of the subprocess started by :func:`run_job_subprocess`."""
+    die_with_parent(parent)
     job, spec = pickle.loads(Path(src).read_bytes())
     if spec:
         try:
@@ -530,4 +557,4 @@ def _map_dask(fn: Callable[[Any], Any], tasks: Sequence[Any], ex: ExecutionOptio
 
 
 if __name__ == "__main__":  # the isolated child of run_job_subprocess
-    sys.exit(_child_main(sys.argv[1], sys.argv[2]))
+    sys.exit(_child_main(sys.argv[1], sys.argv[2], int(sys.argv[3])))

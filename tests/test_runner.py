@@ -207,3 +207,72 @@ def test_dask_local_cluster_runs_the_same_isolated_jobs() -> None:
     assert sorted(seen) == sorted(j.settings["fault"] for j in jobs)
     assert again[0].status is Status.OK
     assert squares == [1, 4, 9]
+
+
+_PARENT = """
+import sys
+sys.path.insert(0, {tests!r})
+import fault_engine
+from rockbench.engines import register
+from rockbench.runner import ExecutionOptions, Job, run_job_subprocess, run_jobs
+from rockbench.scenarios import Block, Scenario
+register("fault", fault_engine.FaultEngine)
+sc = Scenario("hang", Block(0.2, 0.2, 0.8, mass=1.0), duration=5.0, output_rate=200.0)
+job = Job(sc, "fault", {{"fault": "hang", "at": 0.0}})
+print("ready", flush=True)
+if {subprocess!r}:
+    run_job_subprocess(job, timeout=600.0, engine_spec="fault_engine:FaultEngine")
+else:
+    run_jobs([job], ExecutionOptions(jobs=1, timeout=600.0))
+"""
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            out.append(int(stat.parent.name))
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="PR_SET_PDEATHSIG is Linux's")
+@pytest.mark.parametrize("how", ["pool", "subprocess"])
+@pytest.mark.parametrize("sig", ["SIGKILL", "SIGTERM", "SIGHUP"])
+def test_hanging_children_die_with_their_parent(how: str, sig: str) -> None:
+    """A study killed by CI or `timeout` leaves no engine child hanging on (issue 14)."""
+    import signal
+    import subprocess
+
+    code = _PARENT.format(tests=str(Path(__file__).parent), subprocess=how == "subprocess")
+    parent = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                              stderr=subprocess.DEVNULL, text=True)
+    try:
+        assert parent.stdout is not None and parent.stdout.readline().strip() == "ready"
+        deadline = time.monotonic() + 60.0
+        kids: list[int] = []
+        while not kids and time.monotonic() < deadline:  # the engine child has started
+            kids = [k for k in _children(parent.pid) if _alive(k)]
+            time.sleep(0.2)
+        assert kids, "no child process appeared"
+        time.sleep(1.0)  # the child is hanging inside the engine now
+        parent.send_signal(getattr(signal, sig))
+        parent.wait(timeout=30)
+        deadline = time.monotonic() + 20.0
+        while any(_alive(k) for k in kids) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert not any(_alive(k) for k in kids), f"children {kids} outlived their parent"
+    finally:
+        if parent.poll() is None:
+            parent.kill()
