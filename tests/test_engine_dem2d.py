@@ -1,27 +1,37 @@
 """Physics tests of the dem2d engine (planar Distinct Element Method) against Housner.
 
-DEM with soft contacts is not Housner's model: before the first impact it
-follows Housner closely (the closer the stiffer the contacts), at impacts it
-dissipates less than Housner's perfectly inelastic impact (the paper's
-finding), and below the uplift threshold a soft contact rotates a little. The
-tests pin those behaviours down rather than pretending the models agree.
+The ``accurate`` preset is a calibrated DEM (corner sub-contacts, impact
+damping, stiffness from the admitted elastic rotation; module docstring of
+rockbench.engines.dem2d_engine): it must follow Housner on free rocking, pulse
+peaks and sub-threshold rest. The ``paper`` preset is the 3DEC-like model that
+under-dissipates at impacts, as the paper reports for 3DEC; its failures are
+pinned down too, so that the calibration is seen to be what fixes them.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
 
 import numpy as np
 import pytest
-from engine_helpers import B2, PAPER_STACK, SINGLE2
+from engine_helpers import B2, PAPER_STACK, SINGLE2, max_error, zero_crossings
 
 from rockbench.analytic.housner import single_block_reference
 from rockbench.engines import dem2d_kernels as K
 from rockbench.engines import get_engine, register, unregister
-from rockbench.engines.dem2d_engine import Dem2dEngine, Dem2dSettings
+from rockbench.engines.dem2d_engine import (
+    Dem2dEngine,
+    Dem2dSettings,
+    adjacent_pairs,
+    contact_stiffness,
+    corner_contact,
+    probe_eta,
+    stiffness_for,
+)
 from rockbench.engines.settings import SettingsError
 from rockbench.metrics import impact_times
 from rockbench.scenarios import Contact, Scenario, SinePulse
@@ -34,72 +44,100 @@ def warm_jit() -> None:
     Dem2dEngine().simulate(Scenario("warm", B2, initial_tilt=0.5, duration=0.01))
 
 
-def _free(duration: float, tilt: float = 0.5) -> Scenario:
-    return Scenario("free-b2", B2, Contact(1.0, 0.0), initial_tilt=tilt, duration=duration)
+def _free(duration: float, tilt: float = 0.5, eta: float | None = None) -> Scenario:
+    return Scenario("free-b2", B2, Contact(1.0, 0.0, eta=eta), initial_tilt=tilt,
+                    duration=duration)
 
 
-def _peaks(t: np.ndarray, th: np.ndarray, imps: np.ndarray) -> np.ndarray:
-    pairs = zip(imps[:-1], imps[1:], strict=True)
-    return np.array([np.max(np.abs(th[(t > a) & (t < b)])) for a, b in pairs])
+def _pulse(f: float, amp: float, duration: float = 2.0) -> Scenario:
+    return Scenario("pulse", SINGLE2, Contact(1.0, 0.0), SinePulse(f, amp), duration=duration)
 
 
-def test_free_rocking_follows_housner_until_first_impact() -> None:
+def _peak_ratio(sc: Scenario, preset: str) -> float:
+    ref = single_block_reference(sc)
+    tr = Dem2dEngine().simulate(sc, preset)
+    assert tr.status is Status.OK
+    return float(np.max(np.abs(tr.theta)) / np.max(np.abs(ref.theta)))
+
+
+# ---------------------------------------------------------------------- accurate vs Housner
+def test_b2_free_rocking_matches_housner() -> None:
+    """B2 from 0.5 λ over 8 s (about 12 impacts): θ within 0.01 λ, impacts within 0.1 %."""
+    sc = _free(8.0)
+    tr = Dem2dEngine().simulate(sc)
+    assert tr.status is Status.OK
+    assert max_error(sc, tr.theta[:, 0]) <= 0.01  # measured 1e-4 over 20 s
+    ref_imp = np.asarray(single_block_reference(sc).impacts)[:6]
+    np.testing.assert_allclose(zero_crossings(tr.t, tr.theta[:, 0])[:6], ref_imp, rtol=1e-3)
+
+
+def test_impact_ratio_is_housners() -> None:
+    """The energy kept at one impact gives η = 1 − 2mb²/I_O (0.7 for B2) to 0.1 %."""
     sc = _free(1.0)
-    ref = single_block_reference(sc)
+    eta = probe_eta(sc, Dem2dEngine.settings())
+    assert eta == pytest.approx(B2.rocking().eta, rel=1e-3)
+
+
+def test_single2_pulse_peak_matches_housner() -> None:
+    """Single #2, the paper's 3 Hz / 8 mm pulse: peak within 2 % (measured +0.1 %);
+    a positive base acceleration tips the block to θ < 0 first."""
+    sc = _pulse(3.0, 0.008)
+    assert abs(_peak_ratio(sc, "accurate") - 1.0) <= 0.02
     tr = Dem2dEngine().simulate(sc)
-    assert tr.status is Status.OK
-    t1 = impact_times(ref)[0]
-    assert abs(impact_times(tr)[0] - t1) / t1 < 5e-3
-    before = tr.t < t1 - 0.01
-    err = np.max(np.abs(tr.theta[before, 0] - ref.theta[before, 0])) / sc.critical_angle
-    assert err < 5e-3
-
-
-def test_stiffer_contacts_converge_to_rigid_pivot() -> None:
-    sc = _free(0.4)
-    ref = single_block_reference(sc)
-    t1 = impact_times(ref)[0]
-    errs = []
-    for kn in (1e8, 1e10):
-        tr = Dem2dEngine().simulate(sc, {"kn": kn, "ks": kn})
-        m = tr.t < t1 - 0.01
-        errs.append(np.max(np.abs(tr.theta[m, 0] - ref.theta[m, 0])) / sc.critical_angle)
-    assert errs[1] < 0.3 * errs[0] and errs[1] < 2e-3
-
-
-def test_impacts_under_dissipate_and_rocking_decays() -> None:
-    """DEM keeps more of the motion at an impact than Housner, but never gains energy."""
-    sc = _free(6.0)
-    ref = single_block_reference(sc)
-    tr = Dem2dEngine().simulate(sc)
-    assert tr.status is Status.OK
-    p_dem = _peaks(tr.t, tr.theta[:, 0], impact_times(tr))
-    p_ref = _peaks(ref.t, ref.theta[:, 0], impact_times(ref))
-    assert p_dem[0] > 1.2 * p_ref[0]  # measured ~1.9 at the defaults
-    assert p_dem[0] < sc.theta0  # but the impact does dissipate
-    assert np.all(np.diff(p_dem[:5]) < 0)
-
-
-def test_fast_preset_close_to_accurate() -> None:
-    sc = _free(3.0)
-    a = Dem2dEngine().simulate(sc, "accurate")
-    f = Dem2dEngine().simulate(sc, "fast")
-    assert np.max(np.abs(a.theta - f.theta)) / sc.critical_angle < 0.05
-
-
-def test_forced_pulse_peak_and_direction() -> None:
-    sc = Scenario("pulse", SINGLE2, Contact(1.0, 0.0), SinePulse(5.0, 0.004), duration=1.0)
-    ref = single_block_reference(sc)
-    tr = Dem2dEngine().simulate(sc)
-    assert tr.status is Status.OK
-    pk, pk_ref = np.max(np.abs(tr.theta)), np.max(np.abs(ref.theta))
-    # the peak follows the first impact, which DEM under-dissipates: +5 % measured
-    assert 1.0 < pk / pk_ref < 1.10
-    # a positive base acceleration tips the block to θ < 0 first
     first = tr.theta[np.argmax(np.abs(tr.theta[:, 0]) > 1e-3 * sc.critical_angle), 0]
     assert first < 0
-    # the block rides with the base
-    assert abs(tr.x[-1, 0] - float(sc.excitation.displacement(1.0))) < 5e-3
+
+
+def test_subthreshold_rotation_is_the_elastic_closed_form() -> None:
+    """At 0.8 × g tan λ Single #2 stays down; its elastic rotation on the two corner
+    springs is M a h / (2 K b² − M g h) (quasi-static: the 3 Hz pulse is far below the
+    contact frequencies), ≤ 0.8 ε λ by the choice of k_n."""
+    lam = SINGLE2.rocking().lam
+    f, a = 3.0, 0.8 * 9.81 * math.tan(lam)
+    sc = _pulse(f, a / (2 * math.pi * f) ** 2, duration=1.0)
+    s = Dem2dEngine.settings()
+    tr = Dem2dEngine().simulate(sc, s)
+    assert tr.status is Status.OK
+    c = corner_contact(sc, (0, 1), s.subcontacts)
+    kn, _ = contact_stiffness(sc, s)
+    k, m, b, h = kn * c.area, c.mass, c.half_width, c.height
+    theta = m * a * h / (2 * k * b * b - m * 9.81 * h)
+    assert theta / lam <= 0.8 * s.compliance * (1 + 1e-9)
+    # the peak follows the base acceleration's peak a quasi-statically (within 15 %)
+    assert np.max(np.abs(tr.theta)) == pytest.approx(theta, rel=0.15)
+    # and the block rides with the base (no slip on the shear springs)
+    moved = tr.x[-1, 0] - tr.x[0, 0]
+    assert moved == pytest.approx(float(sc.excitation.displacement(sc.duration)), abs=1e-5)
+
+
+def test_stiffness_for_gives_the_admitted_rotation() -> None:
+    """stiffness_for(ε) puts the elastic rotation at the uplift threshold at ε λ."""
+    sc = _pulse(3.0, 0.001)
+    c = corner_contact(sc, (0, 1), 2)
+    kn = stiffness_for(c, 1e-4)
+    k, m, b, h = kn * c.area, c.mass, c.half_width, c.height
+    a = 9.81 * b / h
+    assert m * a * h / (2 * k * b * b - m * 9.81 * h) == pytest.approx(1e-4 * math.atan2(b, h))
+    # the stack: one interface per block, the upper one carrying the top block only
+    st = Scenario("stack", PAPER_STACK)
+    assert adjacent_pairs(st) == [(0, 2), (1, 0)]
+    assert corner_contact(st, (1, 0), 2).mass == pytest.approx(PAPER_STACK.blocks[1].m)
+    assert corner_contact(st, (0, 2), 2).mass == pytest.approx(
+        sum(b.m for b in PAPER_STACK.blocks))
+
+
+def test_paper_stack_pulse_peaks_match_two_block_model() -> None:
+    """The paper's stack, 5 Hz / 4 mm pulse: both peaks within 5 % of the two-block
+    reference (measured +0.0 % top, +0.7 % bottom)."""
+    from rockbench.analytic import reference
+
+    sc = Scenario("stack", PAPER_STACK, Contact(1.0, 0.0), SinePulse(5.0, 0.004),
+                  duration=1.5)
+    tr = Dem2dEngine().simulate(sc)
+    assert tr.status is Status.OK
+    ref = reference(sc)
+    pk, pk_ref = np.max(np.abs(tr.theta), axis=0), np.max(np.abs(ref.theta), axis=0)
+    np.testing.assert_allclose(pk, pk_ref, rtol=0.05)
 
 
 def test_paper_stack_rests() -> None:
@@ -110,31 +148,103 @@ def test_paper_stack_rests() -> None:
     assert np.max(np.abs(tr.x)) < 1e-5
 
 
-def test_paper_stack_rocks_under_pulse() -> None:
-    sc = Scenario("stack", PAPER_STACK, excitation=SinePulse(5.0, 0.004), duration=1.5)
+def test_finer_step_converges() -> None:
+    """Halving Δt changes B2's free rocking by less than 1e-3 λ (central differences)."""
+    sc = _free(2.0)
+    dt, *_ = Dem2dEngine.time_step(sc, Dem2dEngine.settings())
+    a = Dem2dEngine().simulate(sc, {"timestep": dt})
+    b = Dem2dEngine().simulate(sc, {"timestep": dt / 2})
+    assert np.max(np.abs(a.theta - b.theta)) / sc.critical_angle < 1e-3
+
+
+# ---------------------------------------------------------------------- eta override
+def test_eta_override_is_met_at_the_first_impact() -> None:
+    """An η above Housner's is reached by a partly elastic corner (ζ_c by bisection)."""
+    sc = _free(1.0, eta=0.75)
     tr = Dem2dEngine().simulate(sc)
-    assert tr.status in (Status.OK, Status.OVERTURNED)
-    assert np.max(np.abs(tr.theta[:, 1])) / sc.critical_angle > 0.05
+    assert tr.status is Status.OK
+    lam = sc.critical_angle
+    th = tr.theta[:, 0]
+    zc = zero_crossings(tr.t, th)
+    th1 = np.max(np.abs(th[(tr.t > zc[0]) & (tr.t < zc[1])]))
+    eta = math.sqrt((math.cos(lam - th1) - math.cos(lam))
+                    / (math.cos(lam - sc.theta0) - math.cos(lam)))
+    assert eta == pytest.approx(0.75, abs=5e-3)
+
+
+def test_eta_below_housner_unsupported() -> None:
+    tr = Dem2dEngine().simulate(_free(1.0, eta=0.6))
+    assert tr.status is Status.UNSUPPORTED and "outside" in tr.message
+
+
+# ---------------------------------------------------------------------- presets
+def test_fast_preset_close_to_accurate() -> None:
+    """``fast`` within 0.005 λ of ``accurate`` on B2's free rocking (measured 0.001 λ over
+    20 s) and within 1 % on the Single #2 3.3 Hz / 6 mm pulse peak (measured 0.9 %)."""
+    sc = _free(4.0)
+    a = Dem2dEngine().simulate(sc, "accurate")
+    f = Dem2dEngine().simulate(sc, "fast")
+    assert np.max(np.abs(a.theta - f.theta)) / sc.critical_angle < 0.005
+    p = _pulse(3.3, 0.006, duration=1.5)
+    pa = np.max(np.abs(Dem2dEngine().simulate(p, "accurate").theta))
+    pf = np.max(np.abs(Dem2dEngine().simulate(p, "fast").theta))
+    assert abs(pf / pa - 1) < 0.01
+
+
+def test_paper_preset_under_dissipates() -> None:
+    """The 3DEC-like preset keeps more at each impact than Housner (η 0.91 vs 0.70 on
+    B2), so its impacts come late and pulse peaks grow, but it never gains energy."""
+    sc = _free(3.0)
+    eta = probe_eta(sc, Dem2dEngine.settings("paper"))
+    assert 0.85 < eta < 0.95  # measured 0.91
+    tr = Dem2dEngine().simulate(sc, "paper")
+    imp, ref_imp = impact_times(tr)[:3], impact_times(single_block_reference(sc))[:3]
+    assert (imp[2] - ref_imp[2]) / ref_imp[2] > 0.2  # measured +41 %
+    th = np.abs(tr.theta[:, 0])
+    peaks = [th[(tr.t > a) & (tr.t < b)].max() for a, b in zip(imp[:-1], imp[1:], strict=True)]
+    assert sc.theta0 > peaks[0] > peaks[1]
+    assert _peak_ratio(_pulse(3.0, 0.008), "paper") > 1.15  # measured +24 %
+
+
+def test_paper_preset_rocks_below_threshold() -> None:
+    """5 sub-contacts on a Winkler face lift from a third of the uplift moment on:
+    0.067 λ at 0.8 × g tan λ (the accurate preset: 1.6e-5 λ)."""
+    lam = SINGLE2.rocking().lam
+    a = 0.8 * 9.81 * math.tan(lam)
+    sc = _pulse(3.0, a / (2 * math.pi * 3.0) ** 2, duration=1.0)
+    assert np.max(np.abs(Dem2dEngine().simulate(sc, "paper").theta)) / lam > 0.03
 
 
 def test_knobs_take_effect() -> None:
     sc = _free(1.0)
     base = Dem2dEngine().simulate(sc)
-    for kw in ({"timestep": 5e-5}, {"subcontacts": 10}, {"beta": 1e-4}, {"kn": 1e8}):
+    for kw in ({"timestep": 5e-6}, {"subcontacts": 3}, {"beta": 1e-4}, {"kn": 1e8},
+               {"impact_zeta": 1.0}, {"damping": "contact"}):
         other = Dem2dEngine().simulate(sc, kw)
         assert not np.array_equal(base.theta, other.theta), kw
-    assert Dem2dEngine().simulate(sc, {"timestep": 5e-5}).settings["effective_timestep"] == 5e-5
+    assert Dem2dEngine().simulate(sc, {"timestep": 5e-6}).settings["effective_timestep"] == 5e-6
 
 
 def test_settings_validation_and_presets() -> None:
     assert Dem2dEngine.settings() == Dem2dSettings()
-    assert Dem2dEngine.settings("paper").beta == 2.25e-4
-    for bad in ({"subcontacts": 1}, {"kn": -1.0}, {"safety": 3.0}, {"timestep": 0.0}):
+    assert Dem2dEngine.settings("paper").subcontacts == 5
+    for bad in ({"subcontacts": 1}, {"kn": -1.0}, {"safety": 3.0}, {"timestep": 0.0},
+                {"compliance": 0.0}, {"impact_zeta": -1.0}, {"damping": "viscous"}):
         with pytest.raises(SettingsError):
             Dem2dEngine.settings(**bad)
-    # β from the damping ratio: ζ / ω_c of the bottom block
-    dt, beta = Dem2dEngine.time_step(_free(1.0), Dem2dSettings(damping_ratio=0.1))
-    assert beta == pytest.approx(0.1 / np.sqrt(1e9 * 0.5 * 0.2 / 1.0))
+    # paper convention: β = ζ / ω_c of the bottom block on its whole face (no raise of k_n)
+    s = Dem2dEngine.settings("paper", damping_ratio=0.1)
+    dt, kn, _, beta = Dem2dEngine.time_step(_free(1.0), s)
+    assert kn == 1e9
+    assert beta[0] == pytest.approx(0.1 / np.sqrt(1e9 * 0.5 * 0.2 / 1.0))
+    # the paper's Single #2 β (Table 5) from ζ = 0.14
+    _, _, _, beta2 = Dem2dEngine.time_step(_pulse(3.0, 0.001), Dem2dEngine.settings("paper"))
+    assert beta2[0] == pytest.approx(2.25e-4, rel=0.02)
+    # impact damping: ζ_c of the corner oscillator
+    s = Dem2dEngine.settings()
+    _, kn, _, beta = Dem2dEngine.time_step(_free(1.0), s)
+    c = corner_contact(_free(1.0), (0, 1), 2)
+    assert beta[0] * math.sqrt(kn * c.area / c.effective_mass) / 2 == pytest.approx(3.0)
     assert 0 < dt < 1e-4
 
 
@@ -175,16 +285,16 @@ def test_runs_without_numba() -> None:
         "from rockbench.engines import dem2d_kernels as K\n"
         "from rockbench.engines.dem2d_engine import Dem2dEngine\n"
         "from rockbench.scenarios import Block, Scenario\n"
-        "sc = Scenario('x', Block(0.5, 0.2, 1.0, mass=1.0), initial_tilt=0.5, duration=0.02)\n"
+        "sc = Scenario('x', Block(0.5, 0.2, 1.0, mass=1.0), initial_tilt=0.5, duration=0.005)\n"
         "tr = Dem2dEngine().simulate(sc)\n"
         "print(json.dumps([K.HAVE_NUMBA, tr.theta[:, 0].tolist()]))\n"
     )
     env = {**os.environ, "PYTHONWARNINGS": "ignore"}
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=120, env=env, check=True)
+                         timeout=300, env=env, check=True)
     have, theta = json.loads(out.stdout.strip().splitlines()[-1])
     assert have is False
-    sc = Scenario("x", B2, initial_tilt=0.5, duration=0.02)
+    sc = Scenario("x", B2, initial_tilt=0.5, duration=0.005)
     ref = Dem2dEngine().simulate(sc).theta[:, 0]
     assert K.HAVE_NUMBA
     np.testing.assert_allclose(theta, ref, rtol=0, atol=1e-12)

@@ -18,8 +18,8 @@ included, with trapezoidal tributary lengths times the contact depth (the
 smaller out-of-plane depth of the two bodies) as areas. At each sub-contact
 the gap g along b's outward normal n (negative: overlap) gives
 
-* normal force  F_n = max(0, −k_n A g − β k_n A v_n)   (no tension),
-* shear force   F_s += −k_s A v_t Δt, |F_s| ≤ μ F_n (Mohr–Coulomb, no cohesion),
+* normal force  F_n = max(0, −k_n A g − β k_n A v_n)   (no tension; β of the pair),
+* shear force   F_s += −k_s A v_t Δt, |F_s| ≤ μ F_n (Mohr–Coulomb, no cohesion; μ of the pair),
   plus the dashpot −β k_s A v_t while it sticks,
 
 with v_n, v_t the relative velocity of the two bodies' material points there.
@@ -167,7 +167,7 @@ def _select_edges(i: int, j: int, pos: np.ndarray, wverts: np.ndarray, wnorm: np
 def _contact_forces(pos: np.ndarray, vel: np.ndarray, wverts: np.ndarray, wnorm: np.ndarray,
                     nverts: np.ndarray, radius: np.ndarray, pairs: np.ndarray,
                     pair_depth: np.ndarray, pair_edges: np.ndarray, shear: np.ndarray,
-                    kn: float, ks: float, mu: float, beta: float, dt: float,
+                    kn: float, ks: float, pair_mu: np.ndarray, pair_beta: np.ndarray, dt: float,
                     force: np.ndarray, scratch: np.ndarray) -> None:
     """Add every contact's force and moment to ``force`` (n_bodies, 3)."""
     kmax = wverts.shape[1]
@@ -190,6 +190,8 @@ def _contact_forces(pos: np.ndarray, vel: np.ndarray, wverts: np.ndarray, wnorm:
             pair_edges[p] = sel
             for k in range(nsub):
                 shear[p, k] = 0.0
+        beta = pair_beta[p]
+        mu = pair_mu[p]
         a = sel // kmax
         b = sel - a * kmax
         nax = wnorm[i, a, 0]
@@ -258,8 +260,8 @@ def _contact_forces(pos: np.ndarray, vel: np.ndarray, wverts: np.ndarray, wnorm:
 def _steps(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarray,
            inv_i: np.ndarray, lverts: np.ndarray, lnorm: np.ndarray, nverts: np.ndarray,
            radius: np.ndarray, pairs: np.ndarray, pair_depth: np.ndarray,
-           pair_edges: np.ndarray, shear: np.ndarray, kn: float, ks: float, mu: float,
-           beta: float, g: float, base_u: np.ndarray, off: int, wverts: np.ndarray,
+           pair_edges: np.ndarray, shear: np.ndarray, kn: float, ks: float, pair_mu: np.ndarray,
+           pair_beta: np.ndarray, g: float, base_u: np.ndarray, off: int, wverts: np.ndarray,
            wnorm: np.ndarray, force: np.ndarray, scratch: np.ndarray) -> None:
     """``n`` steps (see :func:`advance`); the base at ``base_u[off + step]`` if driven."""
     base = pos.shape[0] - 1
@@ -274,7 +276,7 @@ def _steps(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarra
         world_geometry(pos, lverts, lnorm, nverts, wverts, wnorm)
         force[:, :] = 0.0
         _contact_forces(pos, vel, wverts, wnorm, nverts, radius, pairs, pair_depth,
-                        pair_edges, shear, kn, ks, mu, beta, dt, force, scratch)
+                        pair_edges, shear, kn, ks, pair_mu, pair_beta, dt, force, scratch)
         for b in range(base):
             vel[b, 0] += force[b, 0] * inv_m[b] * dt
             vel[b, 1] += (force[b, 1] * inv_m[b] - g) * dt
@@ -288,8 +290,9 @@ def _steps(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarra
 def advance(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarray,
             inv_i: np.ndarray, lverts: np.ndarray, lnorm: np.ndarray, nverts: np.ndarray,
             radius: np.ndarray, pairs: np.ndarray, pair_depth: np.ndarray,
-            pair_edges: np.ndarray, shear: np.ndarray, kn: float, ks: float, mu: float,
-            beta: float, g: float, poses: np.ndarray, base_u: np.ndarray) -> None:
+            pair_edges: np.ndarray, shear: np.ndarray, kn: float, ks: float,
+            pair_mu: np.ndarray, pair_beta: np.ndarray, g: float, poses: np.ndarray,
+            base_u: np.ndarray) -> None:
     """Take ``n`` central-difference steps (state arrays updated in place).
 
     Parameters
@@ -319,10 +322,11 @@ def advance(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarr
         sub-contact.
     kn, ks : float
         Normal and shear stiffness per unit area (N/m³).
-    mu : float
-        Friction coefficient.
-    beta : float
-        Stiffness-proportional damping coefficient (s).
+    pair_mu : ndarray (n_pairs,)
+        Friction coefficient of each pair.
+    pair_beta : ndarray (n_pairs,)
+        Stiffness-proportional damping coefficient β of each pair's
+        sub-contacts (s).
     g : float
         Gravity (m/s², along −z).
     poses : ndarray (n_bodies − 1, 7)
@@ -339,7 +343,8 @@ def advance(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarr
     force = np.empty((nbody, 3))
     scratch = np.empty(2)
     _steps(n, dt, pos, vel, inv_m, inv_i, lverts, lnorm, nverts, radius, pairs, pair_depth,
-           pair_edges, shear, kn, ks, mu, beta, g, base_u, 0, wverts, wnorm, force, scratch)
+           pair_edges, shear, kn, ks, pair_mu, pair_beta, g, base_u, 0, wverts, wnorm, force,
+           scratch)
     write_poses(pos, poses)
 
 
@@ -347,8 +352,8 @@ def advance(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarr
 def sample(m: int, k: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarray,
            inv_i: np.ndarray, lverts: np.ndarray, lnorm: np.ndarray, nverts: np.ndarray,
            radius: np.ndarray, pairs: np.ndarray, pair_depth: np.ndarray,
-           pair_edges: np.ndarray, shear: np.ndarray, kn: float, ks: float, mu: float,
-           beta: float, g: float, poses: np.ndarray, base_u: np.ndarray,
+           pair_edges: np.ndarray, shear: np.ndarray, kn: float, ks: float, pair_mu: np.ndarray,
+           pair_beta: np.ndarray, g: float, poses: np.ndarray, base_u: np.ndarray,
            out: np.ndarray) -> None:
     """``m`` runs of ``k`` steps, the blocks' poses after each written to ``out[j]``.
 
@@ -364,7 +369,7 @@ def sample(m: int, k: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: n
     scratch = np.empty(2)
     for j in range(m):
         _steps(k, dt, pos, vel, inv_m, inv_i, lverts, lnorm, nverts, radius, pairs,
-               pair_depth, pair_edges, shear, kn, ks, mu, beta, g, base_u, j * k, wverts,
+               pair_depth, pair_edges, shear, kn, ks, pair_mu, pair_beta, g, base_u, j * k, wverts,
                wnorm, force, scratch)
         write_poses(pos, out[j])
     write_poses(pos, poses)
