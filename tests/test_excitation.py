@@ -26,6 +26,7 @@ from rockbench.scenarios import (
     load_scenario,
     save_scenario,
 )
+from rockbench.scenarios.excitation import TiltTable
 from rockbench.store import scenario_hash
 
 EXCITATIONS = [
@@ -183,7 +184,7 @@ def test_motion_bounds_are_the_peaks_over_a_whole_motion():
 # ---------------------------------------------------------------- registry by kind
 BUILT_IN = {"free": (Free, "free"), "sine-pulse": (SinePulse, "pulse"),
             "cosine-pulse": (CosinePulse, "pulse"), "sinusoid": (Sinusoid, "sine"),
-            "record": (Record, "record")}
+            "record": (Record, "record"), "tilt-table": (TiltTable, "tilt")}
 
 
 def test_built_in_kinds_are_registered_with_their_report_groups():

@@ -126,12 +126,17 @@ class Capabilities:
         Whether chamfered (convex prism) blocks are modelled.
     analytic : bool
         True for reference solutions (not physics engines).
+    assemblies : bool
+        Whether it builds :class:`~rockbench.scenarios.assembly.Assembly` scenes
+        (blocks at any pose, convex prisms, fixed supports); others return
+        ``unsupported`` for them.
     """
 
     dimensions: int = 3
     max_blocks: int | None = None
     chamfer: bool = True
     analytic: bool = False
+    assemblies: bool = False
 
 
 def angles_from_quaternions(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -224,6 +229,9 @@ class Engine(ABC):
                 f"{self.name} models at most {cap.max_blocks} block(s), scenario has "
                 f"{scenario.n_blocks}"
             )
+        if scenario.is_assembly and not cap.assemblies:
+            raise UnsupportedScenario(
+                f"{self.name} does not build block assemblies (only single blocks and stacks)")
         if not cap.chamfer and any(b.chamfer > 0 for b in scenario.blocks):
             raise UnsupportedScenario(f"{self.name} does not model chamfered blocks")
         self._check_supported(scenario)
@@ -415,10 +423,16 @@ class _Watchdog:
         height = scenario.stack.total_height
         exc = scenario.excitation
         u_base, v_base = exc.motion_bounds(scenario.duration)
-        # a falling block cannot leave a ball of a few stack heights around its start
-        self.reach2 = (3.0 * height + 2.0 * u_base + 1.0) ** 2
+        # a falling block cannot leave a ball of a few stack heights (or, for a wide
+        # assembly, of its size) around its start
+        scale = max(height, scenario.stack.size) if scenario.is_assembly else height
+        self.reach2 = (3.0 * scale + 2.0 * u_base + 1.0) ** 2
         c, th0 = scenario.initial_poses()
         self.x0, self.z0 = c[:, 0], c[:, 1]
+        # overturning is measured from each block's own orientation at rest (an
+        # assembly's blocks need not stand upright); None: all upright (stacks)
+        angles = scenario.block_angles
+        self.half_turn0 = None if not angles.any() else 0.5 * angles
         self.free = exc.is_free
         mgz0 = float(self.masses @ c[:, 1])
         mgz_up = mgz0 if th0 == 0.0 else float(self.masses @ scenario.stack.centroids[:, 1])
@@ -451,6 +465,10 @@ class _Watchdog:
         """
         x, z = poses[..., 0], poses[..., 2]
         w, qx, qy, qz = (poses[..., i] for i in range(3, 7))
+        if self.half_turn0 is not None:
+            # the orientation relative to the block's own at rest: q · rot_y(−θ_rest)
+            c, s = np.cos(self.half_turn0), np.sin(self.half_turn0)
+            w, qx, qy, qz = w * c + qy * s, qx * c + qz * s, qy * c - w * s, qz * c - qx * s
         # θ = atan2(R02, R22) with both halved; |θ| ≥ π/2 exactly when R22 ≤ 0
         r22 = 0.5 - (qx * qx + qy * qy)
         theta = np.arctan2(qx * qz + w * qy, r22)

@@ -35,6 +35,14 @@ from rockbench import analytic
 from rockbench.engines.base import Engine
 from rockbench.metrics import impact_times, max_error
 from rockbench.scenarios import Block, Scenario, SinePulse, Stack, scenario_to_dict
+from rockbench.scenarios.assembly import (
+    Assembly,
+    Prism,
+    Support,
+    penetration,
+    rotate,
+    voussoir_arch,
+)
 from rockbench.scenarios.catalog import SINGLE2, STACK2
 from rockbench.trajectory import Status, Trajectory
 
@@ -60,6 +68,10 @@ class Tolerances:
         Largest relative error of the peak |θ| under a sine pulse.
     mirror : float
         Largest |θ(+) + θ(−)|/λ for mirrored scenarios.
+    penetration : float
+        Largest overlap of two bodies of an assembly at rest, as a fraction of
+        the assembly's size (every engine documents its contact penetration;
+        1e-3 is 1 mm on a 1 m scene).
     """
 
     rest: float = 2e-3
@@ -67,6 +79,7 @@ class Tolerances:
     impact_time: float = 0.02
     peak: float = 0.05
     mirror: float = 0.01
+    penetration: float = 1e-3
 
 
 def _scenario(name: str, stack: Stack | Block, **kw: Any) -> Scenario:
@@ -212,6 +225,100 @@ def check_forced_peak(engine: Engine, settings: Any = None,
     )
 
 
+def _assembly_scene() -> Assembly:
+    """A small assembly of every kind of body: a block on a support, a block on the base,
+    a trapezoidal prism on top of it (asymmetric, so that mirroring it is a real test)."""
+    return Assembly(
+        (Block(0.4, 0.3, 0.6, density=2000.0), Block(0.3, 0.3, 0.9, density=2000.0),
+         Prism(((0.1, 0.9), (0.4, 0.9), (0.35, 1.2), (0.15, 1.2)), 0.3, density=2000.0)),
+        ((-0.3, 0.6, 0.0), (0.25, 0.45, 0.0), (0.0, 0.0, 0.0)),
+        (Support.rectangle(-0.5, -0.1, 0.0, 0.3),))
+
+
+def _assembly_pulse(scene: Assembly, factor: float = 2.0) -> SinePulse:
+    """A 3 Hz one-sine pulse peaking at ``factor`` × the scene's collapse acceleration."""
+    f = 3.0
+    alpha = math.tan(scene.critical_angle())
+    return SinePulse(f, factor * 9.81 * alpha / (2 * math.pi * f) ** 2)
+
+
+def _rest_assemblies() -> list[Scenario]:
+    return [_scenario("assembly-rest", _assembly_scene(), duration=2.0, output_rate=200.0),
+            _scenario("arch-rest", voussoir_arch(9, 0.2), duration=2.0, output_rate=200.0)]
+
+
+def check_assembly_rest(engine: Engine, settings: Any = None,
+                        tol: Tolerances = Tolerances()) -> None:
+    """Assemblies on a still base (blocks on supports, a prism, an arch) stay at rest."""
+    for sc in _rest_assemblies():
+        traj = _run(engine, sc, settings)
+        assert traj.status is Status.OK, f"{sc.name}: status {traj.status} ({traj.message})"
+        turn = float(np.max(np.abs(traj.theta - traj.theta[0]))) / sc.critical_angle
+        drift = float(np.max(np.hypot(traj.x - traj.x[0], traj.z - traj.z[0])))
+        assert turn <= tol.rest, f"{sc.name}: a block turned by {turn:.2e} λ at rest"
+        size = sc.stack.size
+        assert drift <= 1e-3 * size, f"{sc.name}: a block drifted {drift:.2e} m at rest"
+
+
+def check_assembly_penetration(engine: Engine, settings: Any = None,
+                               tol: Tolerances = Tolerances()) -> None:
+    """At rest no two bodies of an assembly (blocks, supports, base) overlap beyond tol."""
+    for sc in _rest_assemblies():
+        traj = _run(engine, sc, settings)
+        asm = sc.stack
+        polys = [c + rotate(b.profile(), th) for b, c, th in zip(
+            asm.blocks, np.column_stack([traj.x[-1], traj.z[-1]]), traj.theta[-1], strict=True)]
+        fixed = [s.array for s in asm.supports]
+        worst, where = 0.0, ""
+        for i, p in enumerate(polys):
+            below = -float(p[:, 1].min())  # the base is z <= 0
+            if below > worst:
+                worst, where = below, f"block {i + 1} and the base"
+            for j, q in enumerate(polys[i + 1:] + fixed, i + 1):
+                d = penetration(p, q)
+                if d > worst:
+                    what = f"block {j + 1}" if j < len(polys) else f"support {j - len(polys) + 1}"
+                    worst, where = d, f"block {i + 1} and {what}"
+        assert worst <= tol.penetration * asm.size, (
+            f"{sc.name}: {where} overlap by {worst:.2e} m at rest (limit "
+            f"{tol.penetration * asm.size:.2e} m)")
+
+
+def _mirrored_runs(engine: Engine, settings: Any) -> tuple[Trajectory, Trajectory, Scenario]:
+    scene = _assembly_scene()
+    pulse = _assembly_pulse(scene)
+    pos = _scenario("assembly-mirror+", scene, excitation=pulse, duration=1.5)
+    neg = _scenario("assembly-mirror-", scene.mirrored(),
+                    excitation=SinePulse(pulse.frequency, -pulse.amplitude), duration=1.5)
+    return _run(engine, pos, settings), _run(engine, neg, settings), pos
+
+
+def check_assembly_mirror_symmetry(engine: Engine, settings: Any = None,
+                                   tol: Tolerances = Tolerances()) -> None:
+    """An assembly and its mirror image under a mirrored pulse rock as mirror images."""
+    a, b, sc = _mirrored_runs(engine, settings)
+    lam = sc.critical_angle
+    peak = float(np.max(np.abs(a.theta))) / lam
+    assert peak > 0.05, f"the pulse should rock the scene, max |θ| = {peak:.2e} λ"
+    n = min(a.t.size, b.t.size)
+    asym = float(np.max(np.abs(a.theta[:n] + b.theta[:n]))) / lam
+    shift = float(np.max(np.abs(a.x[:n] + b.x[:n])))
+    assert asym <= tol.mirror, f"mirrored assemblies' rotations differ by {asym:.2e} λ"
+    assert shift <= tol.mirror * sc.stack.size, (
+        f"mirrored assemblies' x differ by {shift:.2e} m")
+
+
+def check_assembly_determinism(engine: Engine, settings: Any = None,
+                               tol: Tolerances = Tolerances()) -> None:
+    """Two identical runs of a rocking assembly give identical trajectories."""
+    scene = _assembly_scene()
+    sc = _scenario("assembly-determinism", scene, excitation=_assembly_pulse(scene),
+                   duration=1.0)
+    a, b = _run(engine, sc, settings), _run(engine, sc, settings)
+    assert a.status == b.status and np.array_equal(a.theta, b.theta) and np.array_equal(
+        a.x, b.x), "two identical runs of an assembly differ"
+
+
 Check = Callable[..., None]
 
 #: Every check of the kit, by name (what ``known_failures`` refers to).
@@ -219,7 +326,9 @@ CHECKS: dict[str, Check] = {
     c.__name__.removeprefix("check_"): c
     for c in (check_rest, check_subthreshold, check_mirror_symmetry, check_determinism,
               check_overturning, check_scenario_not_mutated, check_free_rocking,
-              check_forced_peak, check_stack_rest)
+              check_forced_peak, check_stack_rest, check_assembly_rest,
+              check_assembly_penetration, check_assembly_mirror_symmetry,
+              check_assembly_determinism)
 }
 
 
@@ -245,6 +354,9 @@ def conformance_checks(engine: Engine | type[Engine]) -> list[tuple[str, Check]]
         names += ["free_rocking", "forced_peak"]
     if cap.max_blocks is None or cap.max_blocks >= 2:
         names.append("stack_rest")
+    if cap.assemblies:
+        names += ["assembly_rest", "assembly_penetration", "assembly_mirror_symmetry",
+                  "assembly_determinism"]
     return [(n, CHECKS[n]) for n in names]
 
 

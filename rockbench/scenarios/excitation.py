@@ -30,7 +30,7 @@ import numpy as np
 from rockbench.errors import ScenarioError
 from rockbench.scenarios import checks
 
-__all__ = ["Excitation", "Free", "SinePulse", "CosinePulse", "Sinusoid", "Record",
+__all__ = ["Excitation", "Free", "SinePulse", "CosinePulse", "Sinusoid", "Record", "TiltTable",
            "STANDARD_GRAVITY", "MAX_BASE_ACCELERATION", "REPORT_GROUPS", "excitation_kinds",
            "excitation_class", "excitation_from_table"]
 
@@ -42,7 +42,7 @@ STANDARD_GRAVITY = 9.80665
 MAX_BASE_ACCELERATION = 1e6
 
 #: How reports group scenarios by their base motion (an excitation's ``report_group``).
-REPORT_GROUPS = ("free", "pulse", "sine", "record")
+REPORT_GROUPS = ("free", "pulse", "sine", "record", "tilt")
 
 ArrayLike = float | np.ndarray
 
@@ -921,3 +921,80 @@ def _parse_at2(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
     if vals.size < n:
         raise ScenarioError(f"{path}: header says NPTS={n} but {vals.size} values found")
     return dt * np.arange(n), vals[:n]
+
+
+@dataclass(frozen=True)
+class TiltTable(Excitation):
+    """A tilting table, as the base acceleration ramp that loads the blocks alike.
+
+    ü_g(t) = −direction · rate · g · t for t ≥ 0: in the base's frame every
+    block then feels its weight plus a horizontal inertial force α(t) · m g
+    toward ``direction`` · x̂, with α(t) = rate · t; that is gravity tilted by
+    φ = atan(α) (and scaled by sqrt(1 + α²), which changes no static
+    threshold of rigid blocks). A table tilted at φ is thus the moment α(t) =
+    tan φ; the limit-analysis collapse factor α is the tilting-table
+    collapse angle atan(α). Velocity and displacement are the exact
+    integrals rate · g · t²/2 and rate · g · t³/6 (times −direction).
+
+    Parameters
+    ----------
+    rate : float
+        dα/dt in 1/s (the tilt angle grows at rate · cos²φ rad/s); slow
+        enough to be quasi-static (see :mod:`rockbench.studies.tilting`).
+    direction : {+1, -1}
+        +1 leans the blocks toward +x (the base accelerates toward −x).
+    gravity : float
+        The g that α is a fraction of (m/s²): the scenario's.
+    """
+
+    rate: float
+    direction: int = 1
+    gravity: float = STANDARD_GRAVITY
+    kind: ClassVar[str] = "tilt-table"
+    report_group: ClassVar[str] = "tilt"
+    table_keys: ClassVar[frozenset[str]] = frozenset({"rate", "direction", "gravity"})
+
+    def __post_init__(self) -> None:
+        checks.number(self.rate, "tilt-table rate", low=0.0, unit="1/s")
+        if self.direction not in (1, -1) or isinstance(self.direction, bool):
+            raise ScenarioError(f"tilt-table direction must be 1 or -1, got "
+                                f"{checks.describe(self.direction)}")
+        checks.number(self.gravity, "tilt-table gravity", low=0.0, unit="m/s²")
+
+    @property
+    def _k(self) -> float:
+        """−direction · rate · g: ü_g = k t."""
+        return -self.direction * self.rate * self.gravity
+
+    def load_factor(self, t: ArrayLike) -> ArrayLike:
+        """α(t) = rate · t (0 before t = 0): the tangent of the equivalent tilt angle."""
+        return self.rate * np.maximum(np.asarray(t, float), 0.0)
+
+    def acceleration(self, t: ArrayLike) -> ArrayLike:
+        return self._k * np.maximum(np.asarray(t, float), 0.0)
+
+    def velocity(self, t: ArrayLike) -> ArrayLike:
+        return 0.5 * self._k * np.maximum(np.asarray(t, float), 0.0) ** 2
+
+    def displacement(self, t: ArrayLike) -> ArrayLike:
+        return self._k / 6.0 * np.maximum(np.asarray(t, float), 0.0) ** 3
+
+    def scalar_acceleration(self) -> Callable[[float], float]:
+        k = self._k
+        return lambda t: k * t if t > 0.0 else 0.0
+
+    def peak_acceleration(self, t_end: float = math.inf) -> float:
+        return abs(self._k) * max(t_end, 0.0)
+
+    def motion_bounds(self, t_end: float = math.inf) -> tuple[float, float]:
+        """|u_g| and |u̇_g| at ``t_end`` (both grow monotonically)."""
+        t = max(t_end, 0.0)
+        return abs(self._k) * t**3 / 6.0, 0.5 * abs(self._k) * t * t
+
+    @classmethod
+    def from_table(cls, table: Mapping[str, Any], *, source: Path | None = None) -> TiltTable:
+        return cls(**cls.read_fields(table, required=("rate",)))
+
+    def to_table(self) -> dict[str, Any]:
+        return {"type": self.kind, "rate": self.rate, "direction": self.direction,
+                "gravity": self.gravity}

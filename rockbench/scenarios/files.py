@@ -3,6 +3,14 @@
 Each table is checked here with :mod:`rockbench.scenarios.checks` (a string, boolean,
 list or table is never read as a number); the ``[excitation]`` table is read by the
 excitation class its ``type`` names (:func:`~rockbench.scenarios.excitation.excitation_from_table`).
+
+A file describes a stack (blocks bottom first, each centred on the one below
+but for its ``offset``) unless a block has a pose (``x``, ``z``, ``angle``) or
+``vertices``, or the file has ``[[supports]]``: then it is an
+:class:`~rockbench.scenarios.assembly.Assembly`, every block placed where it
+says (``width``/``height`` rectangles by their centroid, ``vertices`` polygons
+by their own frame) and every support a fixed polygon ``vertices`` moving with
+the base.
 """
 
 from __future__ import annotations
@@ -14,6 +22,7 @@ import tomli_w
 
 from rockbench.errors import ScenarioError
 from rockbench.scenarios import checks
+from rockbench.scenarios.assembly import Assembly, Prism, Support
 from rockbench.scenarios.excitation import excitation_from_table
 from rockbench.scenarios.model import Block, Contact, Scenario, Stack
 from rockbench.tomlfile import read_toml
@@ -21,8 +30,12 @@ from rockbench.tomlfile import read_toml
 __all__ = ["load_scenario", "save_scenario", "scenario_from_dict", "scenario_to_dict"]
 
 _TOP = {"name", "description", "duration", "output_rate", "gravity", "blocks", "contact",
-        "initial", "excitation"}
+        "initial", "excitation", "supports"}
 _BLOCK = {"width", "depth", "height", "mass", "density", "chamfer", "offset"}
+#: keys that make a block table (and its file) an assembly's
+_POSE = {"x", "z", "angle", "vertices"}
+_ASSEMBLY_BLOCK = (_BLOCK - {"offset"}) | _POSE
+_SUPPORT = {"vertices"}
 _CONTACT = {"friction", "restitution", "eta", "interface_friction"}
 _INITIAL = {"tilt", "tilt_rad"}
 
@@ -47,6 +60,73 @@ def _blocks(raw_blocks: Any) -> tuple[list[Block], list[float]]:
     return blocks, offsets
 
 
+def _is_assembly(data: dict[str, Any]) -> bool:
+    raw = data.get("blocks")
+    tables = raw if isinstance(raw, list) else []
+    return "supports" in data or any(isinstance(b, dict) and _POSE & set(b) for b in tables)
+
+
+def _assembly(raw_blocks: Any, raw_supports: Any) -> Assembly:
+    if not isinstance(raw_blocks, list) or not raw_blocks:
+        got = "" if raw_blocks is None else f", got {checks.describe(raw_blocks)}"
+        raise ScenarioError(f"scenario needs at least one [[blocks]] table{got}")
+    blocks: list[Block | Prism] = []
+    poses = []
+    for i, raw in enumerate(raw_blocks, 1):
+        where = f"[[blocks]] #{i}"
+        raw = checks.table(raw, where)
+        if "offset" in raw:
+            raise ScenarioError(f"{where}: 'offset' is for stacks; in an assembly (a file with "
+                                f"poses, vertices or [[supports]]) give the centroid 'x'")
+        checks.no_unknown(raw, _ASSEMBLY_BLOCK, where)
+        pose = (raw.pop("x", 0.0), raw.pop("z", None), raw.pop("angle", 0.0))
+        try:
+            if "vertices" in raw:
+                if set(raw) & {"width", "height", "chamfer"}:
+                    raise ScenarioError("takes 'vertices' or 'width'/'height'/'chamfer', "
+                                        "not both")
+                if pose[1] is None:
+                    pose = (pose[0], 0.0, pose[2])
+                if "depth" not in raw:
+                    raise ScenarioError("is missing depth")
+                blocks.append(Prism(raw.pop("vertices"), **raw))
+            else:
+                missing = {"width", "depth", "height"} - set(raw)
+                if missing:
+                    raise ScenarioError(f"is missing {', '.join(sorted(missing))}")
+                if pose[1] is None:
+                    raise ScenarioError("is missing z (the centroid's height) that a "
+                                        "rectangle in an assembly needs")
+                blocks.append(Block(**raw))
+        except ScenarioError as exc:
+            msg = str(exc)
+            raise ScenarioError(f"{where}{' ' if msg.startswith(('is ', 'takes ')) else ': '}"
+                                f"{msg}") from None
+        poses.append(pose)
+    supports = []
+    if raw_supports is not None:
+        if not isinstance(raw_supports, list):
+            raise ScenarioError(f"[[supports]] must be an array of tables, got "
+                                f"{checks.describe(raw_supports)}")
+        for i, raw in enumerate(raw_supports, 1):
+            where = f"[[supports]] #{i}"
+            raw = checks.table(raw, where)
+            checks.no_unknown(raw, _SUPPORT, where)
+            if "vertices" not in raw:
+                raise ScenarioError(f"{where} is missing vertices")
+            try:
+                supports.append(Support(raw["vertices"]))
+            except ScenarioError as exc:
+                raise ScenarioError(f"{where}: {exc}") from None
+    try:
+        return Assembly(tuple(blocks), tuple(poses), tuple(supports))
+    except ScenarioError as exc:
+        msg = str(exc)
+        for i in range(len(blocks), 0, -1):  # name the file's tables, numbered from 1
+            msg = msg.replace(f"block #{i} ", f"[[blocks]] #{i} ")
+        raise ScenarioError(msg) from None
+
+
 def scenario_from_dict(data: dict[str, Any], *, source: Path | None = None,
                        default_name: str = "scenario") -> Scenario:
     """Build a :class:`Scenario` from the parsed TOML structure.
@@ -68,7 +148,11 @@ def scenario_from_dict(data: dict[str, Any], *, source: Path | None = None,
     """
     data = checks.table(data, "scenario")
     checks.no_unknown(data, _TOP, "the scenario file")
-    blocks, offsets = _blocks(data.get("blocks"))
+    if _is_assembly(data):
+        stack: Stack | Assembly = _assembly(data.get("blocks"), data.get("supports"))
+    else:
+        blocks, offsets = _blocks(data.get("blocks"))
+        stack = Stack(tuple(blocks), tuple(offsets))
     contact_raw = checks.table(data.get("contact", {}), "[contact]")
     checks.no_unknown(contact_raw, _CONTACT, "[contact]")
     initial = checks.table(data.get("initial", {}), "[initial]")
@@ -83,7 +167,10 @@ def scenario_from_dict(data: dict[str, Any], *, source: Path | None = None,
         raise ScenarioError(f"[initial] tilt must be a number (fraction of λ), got "
                             f"{checks.describe(tilt)}")
     if "tilt_rad" in initial:
-        lam = blocks[0].rocking(float(g)).lam
+        if isinstance(stack, Assembly):
+            raise ScenarioError("[initial] tilt_rad is for stacks; an assembly's blocks take "
+                                "their own angle")
+        lam = stack.blocks[0].rocking(float(g)).lam
         rad = checks.number(initial["tilt_rad"], "[initial] tilt_rad", unit="rad")
         if not abs(rad) < lam:
             raise ScenarioError(f"[initial] tilt_rad must be smaller in size than the bottom "
@@ -94,7 +181,7 @@ def scenario_from_dict(data: dict[str, Any], *, source: Path | None = None,
     return Scenario(
         name=name,
         description=description,
-        stack=Stack(tuple(blocks), tuple(offsets)),
+        stack=stack,
         contact=Contact(**contact_raw),
         excitation=excitation_from_table(data.get("excitation", {"type": "free"}),
                                          source=source),
@@ -107,12 +194,18 @@ def scenario_from_dict(data: dict[str, Any], *, source: Path | None = None,
 
 def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
     """The TOML structure of a scenario (inverse of :func:`scenario_from_dict`)."""
-    blocks = []
-    for b, off in zip(scenario.blocks, scenario.stack.offsets, strict=True):
-        d = b.to_dict()
-        if off:
-            d["offset"] = off
-        blocks.append(d)
+    stack = scenario.stack
+    supports: list[dict[str, Any]] = []
+    if isinstance(stack, Assembly):
+        tables = stack.to_dict()
+        blocks, supports = tables["blocks"], tables.get("supports", [])
+    else:
+        blocks = []
+        for b, off in zip(stack.blocks, stack.offsets, strict=True):
+            d = b.to_dict()
+            if off:
+                d["offset"] = off
+            blocks.append(d)
     out: dict[str, Any] = {"name": scenario.name}
     if scenario.description:
         out["description"] = scenario.description
@@ -121,6 +214,7 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         "output_rate": scenario.output_rate,
         "gravity": scenario.g,
         "blocks": blocks,
+        **({"supports": supports} if supports else {}),
         "contact": scenario.contact.to_dict(),
         "initial": {"tilt": scenario.initial_tilt},
         "excitation": scenario.excitation.to_table(),

@@ -336,8 +336,11 @@ class Scenario:
     ----------
     name : str
         Identifier (catalog name or file stem).
-    stack : Stack or Block
-        What rocks; a single Block is wrapped into a one-block Stack.
+    stack : Stack, Block or Assembly
+        What rocks; a single Block is wrapped into a one-block Stack. An
+        :class:`~rockbench.scenarios.assembly.Assembly` is any planar
+        arrangement of blocks on the base and fixed supports (engines that
+        build it declare ``Capabilities.assemblies``).
     contact : Contact
         Friction, restitution, optional analytic η.
     excitation : Excitation
@@ -345,7 +348,8 @@ class Scenario:
     initial_tilt : float
         Initial rotation as a fraction of the bottom block's λ; positive tilts
         toward +x. The whole stack is rotated rigidly about the bottom pivot and
-        released from rest.
+        released from rest. Stacks only: an assembly's blocks have their own
+        angles (0 here).
     duration : float
         Simulated time (s).
     output_rate : float
@@ -357,7 +361,7 @@ class Scenario:
     """
 
     name: str
-    stack: Stack
+    stack: Stack | Assembly
     contact: Contact = field(default_factory=Contact)
     excitation: Excitation = field(default_factory=Free)
     initial_tilt: float = 0.0
@@ -371,8 +375,8 @@ class Scenario:
             raise ScenarioError("scenario name must be a non-empty string")
         if isinstance(self.stack, Block):
             object.__setattr__(self, "stack", Stack((self.stack,)))
-        if not isinstance(self.stack, Stack):
-            raise ScenarioError("scenario stack must be a Stack or a Block")
+        if not isinstance(self.stack, (Stack, Assembly)):
+            raise ScenarioError("scenario stack must be a Stack, a Block or an Assembly")
         if not isinstance(self.contact, Contact):
             raise ScenarioError("scenario contact must be a Contact")
         if not isinstance(self.excitation, Excitation):
@@ -383,6 +387,9 @@ class Scenario:
                 f"initial tilt must be a fraction of λ with |tilt| < 1, got "
                 f"{checks.describe(tilt)}"
             )
+        if tilt != 0 and isinstance(self.stack, Assembly):
+            raise ScenarioError(f"initial tilt is for stacks (got {tilt!r}); an assembly's "
+                                f"blocks take their own angle")
         if not isinstance(self.description, str):
             raise ScenarioError(f"scenario description must be a string, got "
                                 f"{checks.describe(self.description)}")
@@ -398,9 +405,24 @@ class Scenario:
                 f"1/duration = {1.0 / self.duration:.3g})")
 
     @property
-    def blocks(self) -> tuple[Block, ...]:
-        """The blocks, bottom first."""
+    def blocks(self) -> tuple[Block, ...] | tuple[Block | Prism, ...]:
+        """The blocks, bottom first (an assembly's in the order given)."""
         return self.stack.blocks
+
+    @property
+    def is_assembly(self) -> bool:
+        """True when :attr:`stack` is an :class:`~rockbench.scenarios.assembly.Assembly`."""
+        return isinstance(self.stack, Assembly)
+
+    @property
+    def block_angles(self) -> np.ndarray:
+        """Each block's own orientation about +y at rest (rad), before :attr:`theta0`.
+
+        Zeros for a stack; an assembly's block angles.
+        """
+        if isinstance(self.stack, Assembly):
+            return self.stack.angles
+        return np.zeros(len(self.stack.blocks))
 
     @property
     def n_blocks(self) -> int:
@@ -414,7 +436,9 @@ class Scenario:
 
     @property
     def theta0(self) -> float:
-        """Initial rotation in rad (fraction × bottom block's λ)."""
+        """Initial rotation in rad (fraction × bottom block's λ); 0 for an assembly."""
+        if isinstance(self.stack, Assembly):
+            return 0.0
         return self.initial_tilt * self.blocks[0].rocking(self.g).lam
 
     @property
@@ -433,7 +457,11 @@ class Scenario:
         """Centroid positions (x, z) of each block at t = 0 and the common angle θ0.
 
         The stack is rotated rigidly about the bottom pivot on the side it tilts to.
+        Each block's orientation is θ0 plus its :attr:`block_angles` (an
+        assembly's centroids at rest, θ0 = 0).
         """
+        if isinstance(self.stack, Assembly):
+            return self.stack.centroids, 0.0
         th = self.theta0
         c = self.stack.centroids
         if th == 0.0:
@@ -449,3 +477,7 @@ class Scenario:
         kw = {f.name: getattr(self, f.name) for f in fields(self)}
         kw.update(changes)
         return Scenario(**kw)
+
+
+# at the end: the assembly module builds on Block (defined above)
+from rockbench.scenarios.assembly import Assembly, Prism  # noqa: E402
