@@ -14,7 +14,7 @@ import pytest
 from engine_helpers import SINGLE2, check_base_follows_excitation, check_sine_pulse_peak
 
 from rockbench.analytic.housner import single_block_reference
-from rockbench.engines import SettingsError
+from rockbench.engines import SettingsError, blender_engine
 from rockbench.engines.blender_engine import BLENDER_DEFAULTS, BlenderEngine, BlenderSettings
 from rockbench.errors import EngineUnavailable
 from rockbench.metrics import impact_times
@@ -37,6 +37,10 @@ def test_unavailable_without_bpy(monkeypatch: pytest.MonkeyPatch) -> None:
         BlenderEngine.check_available()
     with pytest.raises(EngineUnavailable):
         BlenderEngine.version()
+    # on another Python the reason says that no bpy wheel exists for it
+    monkeypatch.setattr(blender_engine, "BPY_PYTHON", (3, 99))
+    with pytest.raises(EngineUnavailable, match=r"only for the CPython .* 3\.99"):
+        BlenderEngine.check_available()
 
 
 def test_presets_and_time_step_rule(engine: BlenderEngine) -> None:

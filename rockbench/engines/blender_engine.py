@@ -84,10 +84,14 @@ import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.settings import EngineSettings
-from rockbench.errors import UnsupportedScenario
+from rockbench.errors import EngineUnavailable, UnsupportedScenario
 from rockbench.scenarios import Scenario
 
-__all__ = ["BlenderEngine", "BlenderSettings", "BLENDER_DEFAULTS"]
+__all__ = ["BlenderEngine", "BlenderSettings", "BLENDER_DEFAULTS", "BPY_PYTHON"]
+
+#: The only Python (major, minor) for which bpy 5.0 wheels exist (checked with
+#: ``pip index versions bpy`` / ``pip download``: Requires-Python ==3.11.*).
+BPY_PYTHON = (3, 11)
 
 #: Blender 5.0's defaults of a new rigid body (read back from bpy): none of them is
 #: what a rocking benchmark wants, so every one is overwritten in ``_build``.
@@ -237,7 +241,16 @@ class BlenderEngine(Engine):
     def library(cls, module: str) -> ModuleType:
         """Import a library (rule 2), noting which process and thread first imported bpy."""
         fresh = module == "bpy" and module not in sys.modules
-        lib = super().library(module)
+        try:
+            lib = super().library(module)
+        except EngineUnavailable as exc:
+            if module == "bpy" and sys.version_info[:2] != BPY_PYTHON:
+                raise EngineUnavailable(
+                    f"{exc}; note: bpy (Blender as a Python module) is built only for the "
+                    f"CPython that Blender embeds, {BPY_PYTHON[0]}.{BPY_PYTHON[1]} for Blender "
+                    f"5.0, and this is Python {sys.version_info[0]}.{sys.version_info[1]}"
+                ) from exc
+            raise
         if fresh:
             _BPY_HOME[:] = [os.getpid(), threading.get_ident()]
         return lib
