@@ -50,6 +50,7 @@ from pebble import ProcessExpired, ProcessPool
 from rockbench.bounds import check_trajectory
 from rockbench.engines import engine_class, get_engine, register
 from rockbench.errors import RockbenchError, UnknownEngine
+from rockbench.limits import check_memory
 from rockbench.method import Method
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
@@ -286,6 +287,8 @@ def run_jobs(
     """
     ex = execution or ExecutionOptions()
     jobs = list(jobs)
+    for job in jobs:  # refused here, before any child allocates (or any run is lost)
+        check_memory(job.scenario)
 
     def limit(job: Job) -> float | None:
         return timeout_of(job) if timeout_of is not None else ex.timeout

@@ -18,8 +18,8 @@ from typing import Any
 
 from rockbench.errors import RockbenchError
 
-__all__ = ["selected_engines", "add_engine_arguments", "add_settings_arguments",
-           "engine_settings", "Progress",
+__all__ = ["selected_engines", "add_engine_arguments", "apply_memory_budget",
+           "add_settings_arguments", "engine_settings", "Progress",
            "add_run_arguments", "add_store_arguments", "add_parallel_arguments",
            "check_parallel_arguments", "execution_options", "open_store", "check_output_path"]
 
@@ -27,9 +27,36 @@ __all__ = ["selected_engines", "add_engine_arguments", "add_settings_arguments",
 # ---------------------------------------------------------------------- engines and settings
 def add_engine_arguments(p: argparse.ArgumentParser, default: str = "all") -> None:
     """The engine selection and settings flags shared by every command that runs engines."""
+    from rockbench.limits import BUDGET_ENV, DEFAULT_BUDGET_GB
+
     p.add_argument("--engine", "-e", default=default, metavar="NAMES",
                    help=f"'all' or a comma list of engines (default: {default})")
     add_settings_arguments(p)
+    p.add_argument("--max-memory", type=float, default=None, metavar="GB",
+                   help=f"memory budget of one run's output samples (default: "
+                        f"{DEFAULT_BUDGET_GB:g} GB, or ${BUDGET_ENV}); a scenario needing more "
+                        "is refused before it runs")
+
+
+def apply_memory_budget(args: argparse.Namespace) -> None:
+    """Pass ``--max-memory`` to this process and every engine child (``ROCKBENCH_MAX_MEMORY``).
+
+    Raises
+    ------
+    RockbenchError
+        Not a positive finite number of GB.
+    """
+    import math
+    import os
+
+    from rockbench.limits import BUDGET_ENV
+
+    gb = getattr(args, "max_memory", None)
+    if gb is None:
+        return
+    if not (math.isfinite(gb) and gb > 0):
+        raise RockbenchError(f"--max-memory must be a positive number of GB, got {gb:g}")
+    os.environ[BUDGET_ENV] = repr(gb)
 
 
 def selected_engines(spec: str, *, include_analytic: bool = True) -> list[str]:

@@ -17,6 +17,7 @@ from rockbench.cli.common import (
     Progress,
     add_engine_arguments,
     add_store_arguments,
+    check_output_path,
     engine_settings,
     execution_options,
     selected_engines,
@@ -151,6 +152,9 @@ def execute_compare(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise RockbenchError(f"--out {args.out!r} exists and is not a directory")
+    check_output_path(out / "results.csv", "--out")
+    if not args.no_db:
+        check_output_path(args.db, "--db")
     label = args.suite or "custom"
     opts = CompareOptions(
         scenarios=scenarios, engines=[e for e in engines if e != REFERENCE], out=out,

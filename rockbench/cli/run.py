@@ -8,6 +8,7 @@ from pathlib import Path
 from rockbench.cli.common import (
     Progress,
     add_engine_arguments,
+    check_output_path,
     engine_settings,
     execution_options,
     selected_engines,
@@ -42,6 +43,17 @@ def _out_path(out: str, engine: str, several: bool) -> Path:
     return path.with_name(f"{path.stem}-{engine}{path.suffix}") if several else path
 
 
+def _check_out(path: Path) -> None:
+    """The trajectory and its ``.json`` sidecar can be written, and the sidecar would not
+    replace a JSON file that is not this trajectory's."""
+    side = path.with_suffix(".json")
+    if side.exists() and not path.exists():
+        raise RockbenchError(f"--out {path}: would overwrite {side}, which was not written with "
+                             f"it (a trajectory's sidecar is FILE.json): choose another name")
+    check_output_path(path, "--out")
+    check_output_path(side, "--out")
+
+
 def execute_run(args: argparse.Namespace) -> int:
     """Run the engines (and the reference), print a table, write trajectories if asked."""
     from rich.console import Console
@@ -58,7 +70,7 @@ def execute_run(args: argparse.Namespace) -> int:
     settings = engine_settings(args, engines)
     if args.out:
         for e in engines:
-            _out_path(args.out, e, len(engines) > 1)
+            _check_out(_out_path(args.out, e, len(engines) > 1))
     has_ref = analytic.has_reference(scenario)
     if has_ref and "analytic" not in engines:
         engines_run = ["analytic", *engines]

@@ -75,6 +75,7 @@ import numpy as np
 from rockbench.bounds import SpeedBound
 from rockbench.engines.settings import EngineSettings, SettingsError
 from rockbench.errors import EngineUnavailable, UnsupportedScenario
+from rockbench.limits import check_memory
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
@@ -241,9 +242,12 @@ class Engine(ABC):
 
         Never raises for physics failures: NaN, explosions, energy gain and
         overturning become the trajectory's ``status``; an unsupported scenario
-        returns status ``unsupported``. Bad settings raise :class:`SettingsError`.
+        returns status ``unsupported``. Bad settings raise :class:`SettingsError`,
+        a scenario over the memory budget :class:`~rockbench.errors.ScenarioError`
+        (:mod:`rockbench.limits`).
         """
         s = self.resolve_settings(settings)
+        check_memory(scenario)
         meta = dict(engine=self.name, engine_version=self.version(), settings=s.to_dict(),
                     scenario=scenario.name)
         try:
@@ -268,6 +272,14 @@ class Engine(ABC):
         t_out = scenario.output_times()
         n_out, nb = t_out.size, scenario.n_blocks
         dt = float(self._build(scenario, settings))
+        interval = 1.0 / scenario.output_rate
+        if not dt <= interval * (1.0 + 1e-9):
+            # a step longer than the output interval only repeats or interpolates samples:
+            # the output would claim a resolution the physics never had
+            raise SettingsError(
+                f"{self.name}: physics time step {dt:.4g} s is longer than the output interval "
+                f"{interval:.4g} s of scenario {scenario.name!r}: lower the engine's step or the "
+                "scenario's output_rate")
         ratio = 1.0 / (scenario.output_rate * dt)
         k = int(round(ratio))
         # when the step divides the output interval, sample right after whole
