@@ -56,18 +56,20 @@ What Blender really does (measured with bpy 5.0.1, see tests/test_engine_blender
   bit), and every operator gets its context explicitly.
 * Blender's matrices are float32: poses carry ~1e-7 relative rounding.
 
-Calibration (``benchmarks/calibrate_blender.py`` and ``rockbench compare --suite
-paper-free`` / ``paper-single-pulse``, bpy 5.0.1): ``accurate`` (Δt 0.1 ms) max
-|θ − θ_ref| ≤ 0.085 λ on B0–B3 over 20 s (B0 0.085, B1 0.07, B2 0.025, B3 0.012), first
-impacts within 0.15 %, later impacts within 0.3 % on B0 and B3 but up to 12 % early on
-the squat B1 (λ = 0.59), pulse peaks −0.46 to −0.10 %; ``fast`` (Δt 1 ms) ≤ 0.20 λ, pulse
-peaks −2.8 to −0.1 %. The project's targets (0.005 λ, impacts within 0.5 %) are out of
-reach: on B0 the error stays at 0.08–0.095 λ from Δt 0.1 ms down to 0.01 ms (0.11 λ at
-0.2 ms), iterations (10–1000), shapes, margins and restitution do not remove it, the blocks
-twist out of plane (yaw up to 0.16 rad) under Blender's friction pyramid. Its likely
-cause is what pybullet showed with its defaults (docs/engine-notes.md): Bullet keeps the
-lifted pivot's contact points while they are within the contact breaking threshold,
-0.02 × the block's bounding radius here (5 cm on B0), which Blender does not expose.
+Calibration (``rockbench compare --suite paper-free`` / ``paper-single-pulse`` and
+``benchmarks/calibrate_blender.py``, bpy 5.0.1): ``accurate`` (Δt 0.1 ms, 50 iterations)
+max |θ − θ_ref| ≤ 0.080 λ on B0–B3 over 20 s (B0 0.080; B1–B3 ≤ 0.035), first impacts
+within 0.09 %, the first three within 0.26 % on B0 and up to 2.5 % on B1, pulse peaks
+−0.26 to +0.61 %, ~4 s per 20 s of B0; ``fast`` (Δt 1 ms) ≤ 0.24 λ, impacts up to 22 %
+on B1 at 0.2 λ, pulse peaks −3.2 to −1.0 %; ``paper`` (Δt 0.21 ms) ≤ 0.10 λ, impacts up
+to 8 %, pulse peaks −0.65 to −0.37 %. The project's free-rocking target (0.005 λ) is out
+of reach: on B0 the error stays at 0.08–0.095 λ from Δt 0.1 ms down to 0.01 ms (0.11 λ
+at 0.2 ms); iterations (10–1000), shapes, margins and restitution do not remove it; the
+blocks twist out of plane (yaw up to 0.16 rad) under Blender's friction pyramid; and the
+response is irregular in the knobs (100 iterations instead of 50 put B1's impacts 12 %
+early). Its likely cause is what pybullet showed with its defaults (docs/engine-notes.md):
+Bullet keeps the lifted pivot's contact points while they are within the contact breaking
+threshold, 0.02 × the block's bounding radius (5 cm on B0), which Blender does not expose.
 """
 
 from __future__ import annotations
