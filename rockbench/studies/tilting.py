@@ -1,0 +1,301 @@
+"""Tilting table: an assembly's quasi-static collapse angle in an engine, against limit analysis.
+
+The table is tilted slowly through the base-acceleration ramp of
+:class:`~rockbench.scenarios.excitation.TiltTable`: α(t) = rate · t is the
+tangent of the equivalent tilt angle (every block feels its weight plus α m g
+horizontally, i.e. gravity turned by atan α). The run records when the assembly
+starts to move relative to the base (the *onset*: a block turned by
+:data:`ONSET_ROTATION` or displaced by :data:`ONSET_DISPLACEMENT` of its size
+relative to the base) and which blocks take part once the motion is developed
+(a block turned or displaced ten times as far: the blocks whose motion is then
+at least :data:`MOVED_FRACTION` of the largest). α at the onset is compared
+with the limit-analysis factor of :func:`rockbench.analytic.limit_analysis.limit_analysis`
+(the scenario's friction, loads toward ``direction``) and the blocks with its
+mechanism.
+
+The onset lags the true threshold: past it the mechanism accelerates from rest
+under a load that grows with the ramp, and it takes a finite time to turn by
+the onset angle. Linearised about the threshold, a rocking mechanism obeys
+θ̈ − p²θ = c p² rate · τ (τ the time since the threshold, p its frequency
+parameter, c = cos λ for one block), so θ = c · rate · (sinh(pτ)/p − τ) ≈
+c · rate · p² τ³ / 6 while pτ is small: the onset comes τ ∝ rate^(−1/3) late,
+i.e. the onset factor overshoots by Δα ∝ rate^(2/3). A rate is shown to be
+quasi-static by halving it (:func:`quasi_static`): the onset factor changes by
+the difference of the two lags, and the Richardson extrapolation
+:attr:`TiltComparison.extrapolated_factor` with that exponent removes the lag.
+
+Runs go through the one pipeline (:func:`rockbench.runner.run_jobs`), so
+their cost (CPU and wall time per run) is recorded next to the accuracy.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from rockbench.analytic.limit_analysis import LimitResult, limit_analysis
+from rockbench.runner import ExecutionOptions, Job, run_jobs
+from rockbench.scenarios import Scenario
+from rockbench.scenarios.assembly import limit_assembly
+from rockbench.scenarios.excitation import TiltTable
+from rockbench.trajectory import Status, Trajectory
+
+__all__ = ["ONSET_ROTATION", "ONSET_DISPLACEMENT", "MOVED_FRACTION", "TiltOutcome",
+           "TiltComparison", "tilt_scenario", "tilt_outcome", "reference", "tilting_table",
+           "quasi_static"]
+
+#: Rotation relative to the rest pose (rad) that marks the onset of motion.
+ONSET_ROTATION = 2e-4
+#: Displacement relative to the base, as a fraction of the block's size, that marks it.
+#: Engines lag a fast base by about one step's travel (pymunk at dt 0.1 ms: 2.5 mm at
+#: α = 0.5 with rate 0.05/s, growing with the base speed as α²/rate), which is not
+#: sliding: :func:`tilt_outcome` measures that lag, proportional to the base velocity,
+#: while α is below half the reference factor, and removes it.
+ONSET_DISPLACEMENT = 2e-3
+#: Fraction of the reference factor below which the lag behind the base is measured.
+_LAG_WINDOW = 0.5
+#: A block takes part in the mechanism if its developed motion is at least this
+#: fraction of the largest block's.
+MOVED_FRACTION = 0.2
+#: How far past the onset (as a multiple of the onset thresholds) the motion is "developed".
+_DEVELOPED = 10.0
+
+
+def tilt_scenario(scenario: Scenario, rate: float, *, direction: int = 1,
+                  alpha_end: float, output_rate: float = 200.0) -> Scenario:
+    """``scenario`` on a tilting table from rest up to α = ``alpha_end`` at ``rate`` (1/s)."""
+    return scenario.replace(
+        name=f"{scenario.name}-tilt{'+' if direction > 0 else '-'}{rate:g}",
+        excitation=TiltTable(rate, direction, gravity=scenario.g),
+        duration=alpha_end / rate, output_rate=output_rate)
+
+
+@dataclass(frozen=True)
+class TiltOutcome:
+    """What one tilting-table run showed.
+
+    Attributes
+    ----------
+    status : Status
+        The run's status (``overturned`` is the usual end of a collapse).
+    rate : float
+        dα/dt (1/s).
+    onset_factor : float
+        α = rate · t at the first sample where a block left its rest pose
+        relative to the base (NaN: none did).
+    moved : tuple of int
+        Blocks taking part in the developed motion (empty if it never developed).
+    rotation_sign : tuple of int
+        For each block in ``moved``, the sign of its rotation (+1: top toward +x),
+        0 for a block that has not turned by the onset rotation (it translates).
+    cpu_time, wall_time : float
+        Cost of the run (s).
+    message : str
+        The run's message.
+    """
+
+    status: Status
+    rate: float
+    onset_factor: float
+    moved: tuple[int, ...]
+    rotation_sign: tuple[int, ...]
+    cpu_time: float
+    wall_time: float
+    message: str = ""
+
+    @property
+    def onset_angle(self) -> float:
+        """atan(onset factor) (rad): the tilt angle at which the assembly moved."""
+        return math.atan(self.onset_factor)
+
+
+def _sizes(scenario: Scenario) -> np.ndarray:
+    return np.array([max(b.width, b.height) for b in scenario.blocks])
+
+
+def tilt_outcome(traj: Trajectory, scenario: Scenario,
+                 alpha_ref: float | None = None) -> TiltOutcome:
+    """Onset and moving blocks of a tilting-table trajectory of ``scenario``.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        The run.
+    scenario : Scenario
+        The scenario on its tilting table (:func:`tilt_scenario`).
+    alpha_ref : float, optional
+        The expected collapse factor: while α < α_ref / 2 each block's lag
+        behind the base, c · u̇_g(t), is fitted and removed from its
+        displacement (None: no correction).
+    """
+    exc = scenario.excitation
+    if not isinstance(exc, TiltTable):
+        raise ValueError(f"{scenario.name} is not on a tilting table ({exc.kind})")
+    cost = (float(getattr(traj, "cpu_time", math.nan) or math.nan), float(traj.wall_time))
+    if traj.t.size < 2 or not traj.status.completed:
+        return TiltOutcome(traj.status, exc.rate, math.nan, (), (), *cost, traj.message)
+    turn = traj.theta - traj.theta[0]
+    u = np.asarray(exc.displacement(traj.t), float)[:, None]
+    slip = traj.x - traj.x[0] - u
+    if alpha_ref is not None:
+        v = np.asarray(exc.velocity(traj.t), float)
+        early = exc.load_factor(traj.t) <= _LAG_WINDOW * alpha_ref
+        vv = float(v[early] @ v[early])
+        if vv > 0:
+            slip = slip - np.outer(v, v[early] @ slip[early] / vv)
+    disp = np.hypot(slip, traj.z - traj.z[0]) / _sizes(scenario)
+    # motion in units of the onset thresholds, per sample and block
+    level = np.maximum(np.abs(turn) / ONSET_ROTATION, disp / ONSET_DISPLACEMENT)
+    peak = level.max(axis=1)
+    started = np.nonzero(peak > 1.0)[0]
+    if started.size == 0:
+        return TiltOutcome(traj.status, exc.rate, math.nan, (), (), *cost, traj.message)
+    onset = float(exc.load_factor(traj.t[started[0]]))
+    developed = np.nonzero(peak > _DEVELOPED)[0]
+    moved: tuple[int, ...] = ()
+    signs: tuple[int, ...] = ()
+    if developed.size:
+        j = developed[0]
+        moved = tuple(int(i) for i in np.nonzero(level[j] >= MOVED_FRACTION * peak[j])[0])
+        signs = tuple(int(np.sign(turn[j, i])) if abs(turn[j, i]) > ONSET_ROTATION else 0
+                      for i in moved)
+    return TiltOutcome(traj.status, exc.rate, onset, moved, signs, *cost, traj.message)
+
+
+def reference(scenario: Scenario, direction: int = 1) -> LimitResult:
+    """The limit-analysis collapse of ``scenario``'s blocks under loads toward ``direction``.
+
+    The scenario's base friction at every joint (associative flow: exact
+    where no joint slides, an upper bound otherwise, see
+    :mod:`rockbench.analytic.limit_analysis`).
+    """
+    return limit_analysis(limit_assembly(scenario.stack), friction=scenario.contact.friction,
+                          direction=direction, g=scenario.g)
+
+
+@dataclass(frozen=True)
+class TiltComparison:
+    """A tilting-table run at a rate and at half of it, against limit analysis.
+
+    Attributes
+    ----------
+    engine : str
+        Engine name.
+    scenario : str
+        Scenario name (at rest).
+    direction : int
+        Sense of the horizontal loads (+1: toward +x).
+    limit : LimitResult
+        The reference factor and mechanism.
+    run, half : TiltOutcome
+        At ``rate`` and at ``rate / 2``.
+    settings : mapping
+        The engine settings used.
+    """
+
+    engine: str
+    scenario: str
+    direction: int
+    limit: LimitResult
+    run: TiltOutcome
+    half: TiltOutcome
+    settings: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def error(self) -> float:
+        """Relative error of the onset factor at half the rate: α_engine / α_LP − 1."""
+        return self.half.onset_factor / self.limit.load_factor - 1.0
+
+    @property
+    def angle_error(self) -> float:
+        """Error of the onset angle at half the rate (rad): atan α_engine − atan α_LP."""
+        return self.half.onset_angle - self.limit.tilt_angle
+
+    @property
+    def extrapolated_factor(self) -> float:
+        """The onset factor extrapolated to rate 0 from the two rates, with Δα ∝ rate^(2/3)."""
+        a, b = self.run.onset_factor, self.half.onset_factor
+        return b - (a - b) / (2.0 ** (2.0 / 3.0) - 1.0)
+
+    @property
+    def extrapolated_error(self) -> float:
+        """Relative error of :attr:`extrapolated_factor` against the LP factor."""
+        return self.extrapolated_factor / self.limit.load_factor - 1.0
+
+    @property
+    def rate_change(self) -> float:
+        """Relative change of the onset factor when the rate is halved (quasi-statics)."""
+        return self.half.onset_factor / self.run.onset_factor - 1.0
+
+    @property
+    def mechanism_matches(self) -> bool:
+        """True if the blocks that moved (at half the rate) are the mechanism's."""
+        return self.half.moved == self.limit.moving_blocks
+
+
+def _jobs(scenarios: Sequence[Scenario], engine: str, settings: Mapping[str, Any],
+          rate: float, direction: int, limits: Sequence[LimitResult],
+          overshoot: float) -> list[Job]:
+    jobs = []
+    for sc, lim in zip(scenarios, limits, strict=True):
+        alpha_end = overshoot * lim.load_factor + 0.02
+        for r in (rate, 0.5 * rate):
+            jobs.append(Job(tilt_scenario(sc, r, direction=direction, alpha_end=alpha_end),
+                            engine, dict(settings)))
+    return jobs
+
+
+def tilting_table(scenarios: Sequence[Scenario], engine: str, *, rate: float = 0.05,
+                  direction: int = 1, settings: Mapping[str, Any] | None = None,
+                  execution: ExecutionOptions | None = None,
+                  overshoot: float = 1.3) -> list[TiltComparison]:
+    """Tilt each scenario at ``rate`` and ``rate / 2`` in ``engine``; compare with the LP.
+
+    Parameters
+    ----------
+    scenarios : sequence of Scenario
+        Assemblies (or single blocks and stacks) at rest.
+    engine : str
+        Registered engine name.
+    rate : float
+        dα/dt (1/s) of the first run; the second runs at half of it.
+    direction : {+1, -1}
+        Sense of the horizontal loads.
+    settings : mapping, optional
+        Engine knob overrides (``"preset"`` selects a preset).
+    execution : ExecutionOptions, optional
+        How the runs are executed (default: one isolated worker).
+    overshoot : float
+        Each run lasts until α = overshoot · α_LP + 0.02.
+
+    Returns
+    -------
+    list of TiltComparison
+        One per scenario, in order.
+
+    Raises
+    ------
+    ValueError
+        A scenario without a collapse mechanism under these loads.
+    """
+    limits = [reference(sc, direction) for sc in scenarios]
+    for sc, lim in zip(scenarios, limits, strict=True):
+        if lim.status != "collapse":
+            raise ValueError(f"{sc.name}: limit analysis finds no collapse ({lim.status})")
+    s = dict(settings or {})
+    jobs = _jobs(scenarios, engine, s, rate, direction, limits, overshoot)
+    trajs = run_jobs(jobs, execution)
+    outcomes = [tilt_outcome(t, j.scenario, lim.load_factor)
+                for t, j, lim in zip(trajs, jobs, [x for x in limits for _ in (0, 1)],
+                                     strict=True)]
+    return [TiltComparison(engine, sc.name, direction, lim, outcomes[2 * k], outcomes[2 * k + 1], s)
+            for k, (sc, lim) in enumerate(zip(scenarios, limits, strict=True))]
+
+
+def quasi_static(comparison: TiltComparison, tol: float) -> bool:
+    """True if halving the rate moved the onset factor by less than ``tol`` (relative)."""
+    return math.isfinite(comparison.rate_change) and abs(comparison.rate_change) < tol

@@ -1,0 +1,320 @@
+"""Assemblies in the Scenario (issue 18 items 1-2): representation, files, validation,
+limit-analysis conversion, engines that build them and the conformance checks."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rockbench.analytic.limit_analysis import limit_analysis
+from rockbench.analytic.limit_geometry import assembly_from_stack
+from rockbench.engines import get_engine
+from rockbench.engines.testing import CHECKS, conformance_checks
+from rockbench.errors import ScenarioError
+from rockbench.scenarios import (
+    Block,
+    Scenario,
+    SinePulse,
+    Stack,
+    catalog,
+    get_scenario,
+    get_suite,
+    load_scenario,
+    save_scenario,
+)
+from rockbench.scenarios.assembly import (
+    Assembly,
+    Prism,
+    Support,
+    drum_column,
+    limit_assembly,
+    parapet,
+    penetration,
+    running_bond_wall,
+    voussoir_arch,
+)
+from rockbench.scenarios.catalog import STACK2
+from rockbench.store import scenario_hash
+from rockbench.trajectory import Status
+
+FAMILIES = ("column", "parapet", "wall", "arch")
+
+
+# ---------------------------------------------------------------- single blocks and stacks
+@pytest.mark.parametrize(("name", "digest"), [
+    ("free-b0", "002a216362e61bdc"), ("free-b3-0.99", "d218e1b67fcf6fbe"),
+    ("single-pulse-3.0hz-8mm", "254c643db22110c9"), ("stack-pulse-6.5hz-2mm", "b37c0be9ed06777e"),
+    ("stack-sine-5.0hz-4mm", "a1d639028e6a5940"),
+    ("slide-stack-pulse-5.0hz-4mm-mu0.10", "f0c94abecdd150e6"),
+])
+def test_stacks_keep_their_content_hash(name, digest):
+    # the hashes of these catalog scenarios before assemblies existed
+    sc = get_scenario(name)
+    assert isinstance(sc.stack, Stack) and not sc.is_assembly
+    assert scenario_hash(sc) == digest
+
+
+def test_stack_scenarios_have_upright_blocks_and_no_supports():
+    sc = get_scenario("stack-pulse-4.0hz-4mm")
+    assert np.array_equal(sc.block_angles, np.zeros(2))
+    c, th = sc.initial_poses()
+    assert th == 0.0 and np.array_equal(c, sc.stack.centroids)
+
+
+# ---------------------------------------------------------------- catalog families
+def test_each_family_has_a_small_suite_of_assemblies():
+    names = set(catalog())
+    total = []
+    for family in FAMILIES:
+        suite = get_suite(f"assembly-{family}")
+        assert 2 <= len(suite) <= 4 and set(suite) <= names
+        total += suite
+        for n in suite:
+            assert get_scenario(n).is_assembly
+    assert get_suite("assemblies") == total
+
+
+@pytest.mark.parametrize("n", range(3, 11))
+def test_drum_column_collapses_as_one_body_at_width_over_height(n):
+    # equal drums: the top k drums rock at α = b/(k h/2), least for k = n (the whole column)
+    col = drum_column(n, width=0.6, drum_height=0.5)
+    res = limit_analysis(col.to_limit(), friction=1.0)
+    assert res.status == "collapse" and res.governing_mode == "rocking"
+    assert res.load_factor == pytest.approx(0.6 / (0.5 * n), rel=1e-7)
+    assert res.moving_blocks == tuple(range(n))
+    assert col.critical_angle() == pytest.approx(math.atan(0.6 / (0.5 * n)), rel=1e-7)
+
+
+def test_parapet_overhanging_its_wall_rocks_alone_on_the_wall_edge():
+    # parapet 0.3 x 0.8 at +0.25 on a 0.6 wide wall: contact from x = 0.1 to the wall
+    # edge 0.3; levers 0.05 (toward +x) and 0.15 (toward −x) over half-height 0.4
+    asm = parapet(0.25)
+    plus = limit_analysis(asm.to_limit(), direction=1)
+    minus = limit_analysis(asm.to_limit(), direction=-1)
+    assert plus.load_factor == pytest.approx(0.05 / 0.4, rel=1e-7)
+    assert minus.load_factor == pytest.approx(0.15 / 0.4, rel=1e-7)
+    assert plus.moving_blocks == minus.moving_blocks == (1,)
+    # its mirror image swaps the two directions
+    mirror = limit_analysis(asm.mirrored().to_limit(), direction=-1)
+    assert mirror.load_factor == pytest.approx(plus.load_factor, rel=1e-7)
+
+
+def test_running_bond_courses_span_the_same_length_with_half_bricks_at_the_ends():
+    wall = running_bond_wall(4, 3, length=0.24, height=0.12)
+    assert len(wall) == 3 + 4 + 3 + 4
+    for z in (0.06, 0.18, 0.30, 0.42):
+        row = [i for i in range(len(wall)) if abs(wall.centroids[i, 1] - z) < 1e-12]
+        v = np.concatenate([wall.world_vertices(i) for i in row])
+        assert v[:, 0].min() == pytest.approx(-0.36) and v[:, 0].max() == pytest.approx(0.36)
+        widths = sorted(wall.blocks[i].width for i in row)
+        assert widths[0] == pytest.approx(0.12 if len(row) == 4 else 0.24)
+    # every brick's weight reaches the base: the total mass is that of a full 0.72 x 0.48 panel
+    assert sum(b.m for b in wall.blocks) == pytest.approx(1800.0 * 0.72 * 0.48 * 0.12)
+
+
+def test_arch_rests_on_its_two_supports_with_springings_at_their_top():
+    arch = voussoir_arch(9, 0.2, 1.0)
+    assert len(arch.supports) == 2 and len(arch) == 9
+    lim = arch.to_limit()
+    # springing voussoirs touch a support, none touches the base (the last support)
+    base = lim.n_blocks + 2
+    on_base = [itf for itf in lim.interfaces if itf.b == base]
+    on_supports = {(itf.a, itf.b - lim.n_blocks) for itf in lim.interfaces if itf.b >= lim.n_blocks
+                   and itf.b != base}
+    assert not on_base and on_supports == {(0, 0), (8, 1)}
+    assert min(float(arch.world_vertices(i)[:, 1].min()) for i in range(9)) == pytest.approx(0.2)
+
+
+def test_stack_as_assembly_gives_the_stacks_limit_analysis():
+    asm = Assembly(STACK2.blocks, tuple((float(x), float(z), 0.0) for x, z in STACK2.centroids))
+    for d in (1, -1):
+        a = limit_analysis(asm.to_limit(), direction=d)
+        b = limit_analysis(assembly_from_stack(STACK2), direction=d)
+        assert a.load_factor == pytest.approx(b.load_factor, rel=1e-9)
+        assert a.moving_blocks == b.moving_blocks
+    assert limit_assembly(STACK2).n_blocks == 2
+
+
+# ---------------------------------------------------------------- prisms
+def test_prism_of_a_rectangle_has_the_blocks_mass_and_inertia():
+    blk = Block(0.4, 0.3, 1.1, density=2500.0)
+    pr = Prism(((-0.2, -0.55), (0.2, -0.55), (0.2, 0.55), (-0.2, 0.55)), 0.3, density=2500.0)
+    assert pr.m == pytest.approx(blk.m, rel=1e-12)
+    assert pr.inertia == pytest.approx(blk.inertia, rel=1e-12)
+    assert np.allclose(pr.profile(), blk.profile())
+
+
+def test_triangular_prism_inertia_against_closed_forms():
+    # right triangle, legs a along x and c along z: centroid (a/3, c/3), area ac/2;
+    # ∫x² = c a³/36, ∫z² = a c³/36 and ∫xz = −a²c²/72 about the centroid
+    a, c, d, m = 0.6, 0.9, 0.2, 5.0
+    pr = Prism(((0.0, 0.0), (a, 0.0), (0.0, c)), d, mass=m)
+    rho = m / (0.5 * a * c)
+    assert pr.centroid == pytest.approx([a / 3, c / 3])
+    t = pr.inertia_tensor
+    assert t[1, 1] == pytest.approx(rho * (c * a**3 + a * c**3) / 36.0, rel=1e-12)
+    assert t[0, 0] == pytest.approx(m * d * d / 12 + rho * a * c**3 / 36.0, rel=1e-12)
+    assert t[2, 2] == pytest.approx(m * d * d / 12 + rho * c * a**3 / 36.0, rel=1e-12)
+    assert t[0, 2] == pytest.approx(rho * a * a * c * c / 72.0, rel=1e-12)
+
+
+def test_penetration_of_convex_polygons():
+    sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    assert penetration(sq, sq + [0.9, 0.2]) == pytest.approx(0.1)
+    assert penetration(sq, sq + [1.0, 0.0]) == pytest.approx(0.0, abs=1e-15)
+    assert penetration(sq, sq + [1.25, 0.0]) == pytest.approx(-0.25)
+
+
+# ---------------------------------------------------------------- files
+EXAMPLE = """
+name = "two on a pier"
+duration = 1.0
+
+[[blocks]]            # a rectangle placed by its centroid
+width = 0.4
+depth = 0.3
+height = 0.6
+density = 2000.0
+x = -0.3
+z = 0.6
+
+[[blocks]]            # a convex polygon, vertices in its own frame, placed by x, z
+vertices = [[-0.15, 0.0], [0.15, 0.0], [0.1, 0.4], [-0.1, 0.4]]
+depth = 0.3
+mass = 40.0
+x = 0.25
+z = 0.0
+
+[[supports]]          # a fixed pier on the base
+vertices = [[-0.5, 0.0], [-0.1, 0.0], [-0.1, 0.3], [-0.5, 0.3]]
+"""
+
+
+def _write(tmp_path: Path, text: str) -> Path:
+    p = tmp_path / "scene.toml"
+    p.write_text(text)
+    return p
+
+
+def test_example_file_loads_as_an_assembly_and_round_trips(tmp_path):
+    sc = load_scenario(_write(tmp_path, EXAMPLE))
+    asm = sc.stack
+    assert isinstance(asm, Assembly) and len(asm.supports) == 1
+    assert isinstance(asm.blocks[0], Block) and isinstance(asm.blocks[1], Prism)
+    # trapezoid of bases 0.3 and 0.2, height 0.4: centroid at 0.4 (0.3 + 2·0.2)/(3·0.5)
+    assert asm.centroids[1] == pytest.approx([0.25, 0.4 * 0.7 / 1.5])
+    assert asm.blocks[0].m == pytest.approx(2000.0 * 0.4 * 0.3 * 0.6)
+    back = load_scenario(save_scenario(sc, tmp_path / "again.toml"))
+    assert back == sc and scenario_hash(back) == scenario_hash(sc)
+
+
+@pytest.mark.parametrize("name", get_suite("assemblies"))
+def test_catalog_assemblies_round_trip(tmp_path, name):
+    sc = get_scenario(name)
+    back = load_scenario(save_scenario(sc, tmp_path / f"{name}.toml"))
+    assert back == sc.replace(name=name) and scenario_hash(back) == scenario_hash(sc)
+
+
+BAD = [
+    ("z = 0.6", "z = 0.5", "overlap"),  # the rectangle sinks into the pier
+    ("z = 0.6", "z = 0.7", "touch no support"),  # ... or floats above it
+    ("[[-0.15, 0.0], [0.15, 0.0], [0.1, 0.4], [-0.1, 0.4]]",
+     "[[-0.1, 0.4], [0.1, 0.4], [0.15, 0.0], [-0.15, 0.0]]", "counter-clockwise"),
+    ("[[-0.15, 0.0], [0.15, 0.0], [0.1, 0.4], [-0.1, 0.4]]",
+     "[[-0.15, 0.0], [0.15, 0.0], [0.0, 0.1], [0.1, 0.4], [-0.1, 0.4]]", "not convex"),
+    ("x = -0.3\n", "x = -0.3\noffset = 0.1\n", "'offset' is for stacks"),
+    ("z = 0.6\n", "\n", "missing z"),
+    ("x = 0.25\n", "x = 0.25\nangle = 1.6\n", "angle must be within"),
+    ("mass = 40.0\n", "mass = 40.0\nheight = 0.4\n", "not both"),
+    ('duration = 1.0', 'duration = 1.0\n[initial]\ntilt = 0.2', "initial tilt is for stacks"),
+    ("[-0.5, 0.3]]", "[-0.5, 0.3], [-0.45, 0.15]]", "[[supports]] #1: support"),
+    ("x = 0.25\n", 'x = "a"\n', "[[blocks]] #2 x must be a finite number"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "expect"), BAD, ids=[b[2] for b in BAD])
+def test_bad_assembly_files_give_one_line_naming_file_and_field(tmp_path, old, new, expect):
+    assert old in EXAMPLE
+    path = _write(tmp_path, EXAMPLE.replace(old, new, 1))
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(path)
+    msg = str(err.value)
+    assert msg.startswith(str(path)) and "\n" not in msg and expect in msg, msg
+
+
+def test_overlap_message_names_the_bodies():
+    with pytest.raises(ScenarioError, match=r"block 0 and block 1 overlap by 0\.1"):
+        Assembly((Block(1.0, 1.0, 1.0, mass=1.0),) * 2, ((0.0, 0.5, 0.0), (0.9, 0.5, 0.0)))
+
+
+# ---------------------------------------------------------------- engines
+def _inclined() -> Scenario:
+    """A block at 0.1 rad resting on a support whose top face slopes at the same angle."""
+    th, w, h = 0.1, 0.3, 0.6
+    top0, top1 = 0.3, 0.3 - 0.8 * math.tan(th)  # the face descends toward +x
+    sup = Support(((-0.4, 0.0), (0.4, 0.0), (0.4, top1), (-0.4, top0)))
+    mid = np.array([0.0, 0.5 * (top0 + top1)])
+    c = mid + 0.5 * h * np.array([math.sin(th), math.cos(th)])
+    asm = Assembly((Block(w, 0.3, h, density=2000.0),), ((float(c[0]), float(c[1]), th),), (sup,))
+    return Scenario(name="inclined", stack=asm, duration=1.0, output_rate=200.0)
+
+
+def _pymunk():
+    return get_engine("pymunk")
+
+
+def test_inclined_block_keeps_its_angle_and_is_not_called_overturned():
+    sc = _inclined()
+    traj = _pymunk().simulate(sc)
+    assert traj.status is Status.OK, traj.message
+    assert traj.theta[:, 0] == pytest.approx(0.1, abs=1e-6)
+
+
+def test_stack_built_as_an_assembly_rocks_like_the_stack():
+    exc = SinePulse(4.0, 0.004)
+    stack = Scenario(name="s", stack=STACK2, excitation=exc, duration=1.5)
+    asm = Assembly(STACK2.blocks, tuple((float(x), float(z), 0.0) for x, z in STACK2.centroids))
+    other = stack.replace(stack=asm)
+    a, b = _pymunk().simulate(stack), _pymunk().simulate(other)
+    assert a.status is b.status is Status.OK
+    assert np.max(np.abs(a.theta)) > 0.01  # it rocks
+    assert np.max(np.abs(a.theta - b.theta)) < 1e-9
+    assert np.max(np.abs(a.x - b.x)) < 1e-9
+
+
+def test_engines_without_assemblies_say_unsupported():
+    sc = get_scenario("parapet-offset0.25")
+    traj = get_engine("analytic").simulate(sc)
+    assert traj.status is Status.UNSUPPORTED
+    assert "does not build block assemblies" in traj.message
+    assert not get_engine("analytic").capabilities.assemblies
+    assert _pymunk().capabilities.assemblies
+
+
+def test_toppling_block_of_an_assembly_is_reported_overturned():
+    sc = get_scenario("parapet-offset0.25").replace(
+        excitation=SinePulse(1.0, 3.0 * 9.81 * 0.125 / (2 * math.pi) ** 2), duration=3.0)
+    traj = _pymunk().simulate(sc)
+    assert traj.status is Status.OVERTURNED and "block 2" in traj.message, traj.message
+    # the wall below the parapet did not go over
+    assert np.max(np.abs(traj.theta[:, 0])) < 0.5 * math.pi
+
+
+ASSEMBLY_CHECKS = [n for n in CHECKS if n.startswith("assembly_")]
+
+
+@pytest.mark.parametrize("engine", ["pymunk", "mujoco"])
+@pytest.mark.parametrize("check", ASSEMBLY_CHECKS)
+def test_assembly_conformance(engine, check):
+    eng = get_engine(engine)
+    chosen = dict(conformance_checks(eng))
+    assert check in chosen and check not in eng.known_failures
+    chosen[check](eng)
+
+
+def test_assembly_checks_are_chosen_by_the_capability():
+    names = [n for n, _ in conformance_checks(get_engine("analytic"))]
+    assert not set(ASSEMBLY_CHECKS) & set(names)
