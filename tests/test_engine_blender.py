@@ -79,7 +79,7 @@ def test_blender_defaults_are_not_zero_and_all_are_overwritten(engine: BlenderEn
     assert fresh == pytest.approx(BLENDER_DEFAULTS)
     # the plugin sets every one of them from the scenario and the settings
     sc = Scenario("read-back", Block(0.5, 0.2, 1.0, mass=2.0, chamfer=0.02),
-                  excitation=SinePulse(2.0, 0.001), duration=0.5)
+                  excitation=SinePulse(2.0, 0.001), duration=0.5, output_rate=480.0)
     sc = sc.replace(contact=Contact(friction=0.64, restitution=0.09))
     s = engine.settings(fps=480.0, substeps_per_frame=7, solver_iterations=33,
                         use_split_impulse=False, collision_margin=2e-4)
@@ -119,7 +119,8 @@ def test_time_step_is_frame_over_substeps(engine: BlenderEngine, fps: float,
                                           substeps: int) -> None:
     # free fall over one frame T of N semi-implicit Euler steps of T/N from rest drops
     # g T² (N + 1) / (2N): measure N (the paper's rule 1/((n_s + 1)·fps) would give n_s + 1)
-    sc = Scenario("fall", Block(0.5, 0.2, 1.0, mass=1.0), duration=1.0)
+    # (output at the frame rate: one Blender frame of n_s sub-steps per knob frame)
+    sc = Scenario("fall", Block(0.5, 0.2, 1.0, mass=1.0), duration=1.0, output_rate=fps)
     frame = engine._build(sc, engine.settings(fps=fps, substeps_per_frame=substeps))
     try:
         ob = engine._blocks[0]
@@ -192,14 +193,27 @@ def test_margin_does_not_inflate_hulls(engine: BlenderEngine, shape: str) -> Non
 
 @needs_bpy
 def test_frame_longer_than_output_interval(engine: BlenderEngine) -> None:
-    # the paper's 240 fps against 1 kHz output: one frame per step, interpolated samples
-    sc = get_scenario("free-b2-0.5").replace(duration=1.0)
-    tr = engine.simulate(sc, {"fps": 240.0, "substeps_per_frame": 20})
+    # the paper's 240 fps × 20 against 1 kHz output runs as 4800 frames of one sub-step:
+    # the same Bullet steps as 240 frames of 20 sub-steps, which an output at 240 Hz runs
+    # as such; in free rocking the two agree at every 240 fps frame
+    sc = get_scenario("free-b2-0.5").replace(duration=0.6)
+    knobs = {"fps": 240.0, "substeps_per_frame": 20}
+    tr = engine.simulate(sc, knobs)
     assert tr.status is Status.OK
     np.testing.assert_allclose(np.diff(tr.t), 1e-3)
-    assert tr.settings["effective_timestep"] == pytest.approx(1 / 240)
+    assert tr.settings["effective_timestep"] == pytest.approx(1 / 4800)
+    frames = engine.simulate(sc.replace(output_rate=240.0), knobs)
+    assert frames.settings["effective_timestep"] == pytest.approx(1 / 240)
+    # 1 kHz samples at multiples of 1/240 s: t = 0.025 k (every 6th frame, 25th sample)
+    np.testing.assert_allclose(tr.theta[::25], frames.theta[::6], rtol=0, atol=1e-6)
     first = impact_times(tr)[0]
     assert first == pytest.approx(float(impact_times(single_block_reference(sc))[0]), rel=5e-3)
+
+
+@needs_bpy
+def test_paper_preset_pulse_peak(engine: BlenderEngine) -> None:
+    # the paper's preset (240 fps, split into 4800 frames at 1 kHz output) under a pulse
+    check_sine_pulse_peak(engine, "paper")
 
 
 @needs_bpy
