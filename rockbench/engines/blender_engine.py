@@ -78,6 +78,16 @@ response is irregular in the knobs (100 iterations instead of 50 put B1's impact
 early). Its likely cause is what pybullet showed with its defaults (docs/engine-notes.md):
 Bullet keeps the lifted pivot's contact points while they are within the contact breaking
 threshold, 0.02 × the block's bounding radius (5 cm on B0), which Blender does not expose.
+The paper's two-block stack under the eight pulses (``paper-stack-pulse``, accurate):
+peaks of both blocks −24 to +4 % of the two-block reference (−24 % at 3.3 Hz/4 mm, an
+uplift ratio of 1.12).
+
+The paper's Table 2 study (``rockbench compare --suite paper-sensitivity``, from
+``accurate``, B0): iterations 10/100/1000 and margins 1e-3/1e-5/1e-6 m barely matter
+(0.08–0.10 λ; margins bit-identical with box shapes), a mesh dissipates far too little
+(0.65 λ, still rocking at 20 s), sub-steps and rate matter most: 2 sub-steps at the
+paper's 240 fps stop B0 at 10.4 s (the paper: 10–11 s; Housner: 16.5 s to |θ| < 0.01 λ),
+at 60 fps at 5.9 s.
 """
 
 from __future__ import annotations
