@@ -23,7 +23,10 @@ Model (one per scenario, built from the same :class:`Scenario` as every engine):
   spring and its shear obeys Coulomb friction (``frictionModel Coulomb`` with
   the scenario's μ, normal force from the spring), so the point carries no
   force at all once it lifts off. With μ = 0 a ``zeroLength`` element with the
-  same spring carries the normal force alone. The interface's vertical stiffness is
+  same spring carries the normal force alone. The contact elements keep their global
+  orientation (normal along z), exact on the base; on a block-to-block
+  interface the normal is off by the lower block's tilt, a second-order
+  error in the gap while that tilt stays small. The interface's vertical stiffness is
   K = M ω_c² (M: the mass it carries, ω_c = 2π ``contact_frequency``), shared
   by the points in proportion to their tributary lengths; the shear stiffness
   before slip equals the normal one.
@@ -62,16 +65,28 @@ contact point at each pivot (``springs = 2``: Housner's own assumption of an
 impact at the corner) the result barely depends on ζ once the contact does
 not bounce: at f_c = 1 kHz, Δt = 50 µs every ζ in 1.45–1.7 keeps
 max |θ − θ_ref| ≤ 0.004 λ and the three impact times within 0.4 % on all four
-blocks, and ``accurate`` takes ζ = 1.6; ``fast`` (f_c = 200 Hz, Δt = 0.5 ms,
-the same ζ) stays within 0.021 λ and 2 %. A Winkler bed of 10 points per
-interface (the ``winkler`` preset) spreads each impact over the whole face,
-and no single ζ matches Housner's η on all blocks (B0 and B1 need ζ ≈ 3.5,
-B3 ≈ 5 at f_c = 500 Hz, with impact times moving by several per cent between
-neighbouring ζ). The contact stiffness matters through the dashpots: a
-dashpot pulls on a point that is still compressed but separating, for about
-τ = 2ζ/ω_c, which robs a block lifting off from rest of its energy (Single #2's
-3.3 Hz / 8 mm peak is 7 % low at f_c = 200 Hz with 10 points, 0.3 % at 1 kHz
-with 2), hence the stiff contact of ``accurate``.
+blocks, and ``accurate`` takes ζ = 1.6. Measured with ``rockbench compare``
+(suites paper-free, paper-single-pulse, paper-stack-pulse): ``accurate`` keeps
+the first three impact times within 0.53 % on all ten free cases and
+max |θ − θ_ref| ≤ 0.0062 λ up to the third impact, but over the whole 20 s
+only three cases stay within 0.005 λ: once the amplitude falls below ~0.1 λ
+the compliant contact removes more than Housner's η per impact and the block
+comes to rest early (B0: 0.038 λ at 16 s, B3 from 0.5 λ: 0.012 λ); the six
+Single #2 pulse peaks are 0.8–1.7 % low; the paper's two-block pulses lie
+within −18 to +16 % of the two-block model (worst near uplift, 3.3 Hz / 4 mm).
+``fast`` (f_c = 200 Hz, Δt = 0.5 ms, the same ζ) stays within 0.031 λ up to
+the third impact with impact times within 2.2 % (over 20 s up to 0.20 λ, on
+B0, which it brings to rest early) and pulse peaks 2.4–6.3 % low, at a tenth
+of the cost. A stiffer contact shortens the tail error (f_c = 2 kHz,
+Δt = 25 µs: B0 0.009 λ) but delays the first impacts by up to 0.4 % at twice
+the cost. A Winkler bed of 10 points per interface (the ``winkler`` preset)
+spreads each impact over the whole face, and no single ζ matches Housner's η
+on all blocks (B0 and B1 need ζ ≈ 3.5, B3 ≈ 5 at f_c = 500 Hz, with impact
+times moving by several per cent between neighbouring ζ). The contact
+stiffness matters through the dashpots: a dashpot pulls on a point that is
+still compressed but separating, for about τ = 2ζ/ω_c, which robs a block
+lifting off from rest of energy (Single #2's 3.3 Hz / 8 mm peak is 7 % low at
+f_c = 200 Hz with 10 points), hence the stiff contact of ``accurate``.
 
 Library notes: the ``openseespy`` 3.8.0.0 wheel needs ``openseespylinux`` 3.8,
 which the package index does not offer for Python 3.11, so pip installs
