@@ -927,14 +927,15 @@ def _parse_at2(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
 class TiltTable(Excitation):
     """A tilting table, as the base acceleration ramp that loads the blocks alike.
 
-    ü_g(t) = −direction · rate · g · t for t ≥ 0: in the base's frame every
+    ü_g(t) = −direction · rate · g · (t − delay) for t ≥ delay (the base is
+    still before, so that a scene can settle on its contacts): in the base's frame every
     block then feels its weight plus a horizontal inertial force α(t) · m g
-    toward ``direction`` · x̂, with α(t) = rate · t; that is gravity tilted by
+    toward ``direction`` · x̂, with α(t) = rate · (t − delay); that is gravity tilted by
     φ = atan(α) (and scaled by sqrt(1 + α²), which changes no static
     threshold of rigid blocks). A table tilted at φ is thus the moment α(t) =
     tan φ; the limit-analysis collapse factor α is the tilting-table
     collapse angle atan(α). Velocity and displacement are the exact
-    integrals rate · g · t²/2 and rate · g · t³/6 (times −direction).
+    integrals rate · g · s²/2 and rate · g · s³/6 (times −direction, s = t − delay).
 
     Parameters
     ----------
@@ -945,14 +946,18 @@ class TiltTable(Excitation):
         +1 leans the blocks toward +x (the base accelerates toward −x).
     gravity : float
         The g that α is a fraction of (m/s²): the scenario's.
+    delay : float
+        Time before the ramp starts (s).
     """
 
     rate: float
     direction: int = 1
     gravity: float = STANDARD_GRAVITY
+    delay: float = 0.0
     kind: ClassVar[str] = "tilt-table"
     report_group: ClassVar[str] = "tilt"
-    table_keys: ClassVar[frozenset[str]] = frozenset({"rate", "direction", "gravity"})
+    table_keys: ClassVar[frozenset[str]] = frozenset({"rate", "direction", "gravity",
+                                                                    "delay"})
 
     def __post_init__(self) -> None:
         checks.number(self.rate, "tilt-table rate", low=0.0, unit="1/s")
@@ -960,6 +965,7 @@ class TiltTable(Excitation):
             raise ScenarioError(f"tilt-table direction must be 1 or -1, got "
                                 f"{checks.describe(self.direction)}")
         checks.number(self.gravity, "tilt-table gravity", low=0.0, unit="m/s²")
+        checks.number(self.delay, "tilt-table delay", low=0.0, strict=False, unit="s")
 
     @property
     def _k(self) -> float:
@@ -967,28 +973,35 @@ class TiltTable(Excitation):
         return -self.direction * self.rate * self.gravity
 
     def load_factor(self, t: ArrayLike) -> ArrayLike:
-        """α(t) = rate · t (0 before t = 0): the tangent of the equivalent tilt angle."""
-        return self.rate * np.maximum(np.asarray(t, float), 0.0)
+        """α(t) = rate · (t − delay), 0 before: the tangent of the equivalent tilt angle."""
+        return self.rate * self._ramp(t)
+
+    def _ramp(self, t: ArrayLike) -> np.ndarray:
+        return np.maximum(np.asarray(t, float) - self.delay, 0.0)
 
     def acceleration(self, t: ArrayLike) -> ArrayLike:
-        return self._k * np.maximum(np.asarray(t, float), 0.0)
+        return self._k * self._ramp(t)
 
     def velocity(self, t: ArrayLike) -> ArrayLike:
-        return 0.5 * self._k * np.maximum(np.asarray(t, float), 0.0) ** 2
+        return 0.5 * self._k * self._ramp(t) ** 2
 
     def displacement(self, t: ArrayLike) -> ArrayLike:
-        return self._k / 6.0 * np.maximum(np.asarray(t, float), 0.0) ** 3
+        return self._k / 6.0 * self._ramp(t) ** 3
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        return (self.delay,) if self.delay > 0 else ()
 
     def scalar_acceleration(self) -> Callable[[float], float]:
-        k = self._k
-        return lambda t: k * t if t > 0.0 else 0.0
+        k, t0 = self._k, self.delay
+        return lambda t: k * (t - t0) if t > t0 else 0.0
 
     def peak_acceleration(self, t_end: float = math.inf) -> float:
-        return abs(self._k) * max(t_end, 0.0)
+        return abs(self._k) * max(t_end - self.delay, 0.0)
 
     def motion_bounds(self, t_end: float = math.inf) -> tuple[float, float]:
         """|u_g| and |u̇_g| at ``t_end`` (both grow monotonically)."""
-        t = max(t_end, 0.0)
+        t = max(t_end - self.delay, 0.0)
         return abs(self._k) * t**3 / 6.0, 0.5 * abs(self._k) * t * t
 
     @classmethod
@@ -997,4 +1010,4 @@ class TiltTable(Excitation):
 
     def to_table(self) -> dict[str, Any]:
         return {"type": self.kind, "rate": self.rate, "direction": self.direction,
-                "gravity": self.gravity}
+                "gravity": self.gravity, "delay": self.delay}
