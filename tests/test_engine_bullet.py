@@ -143,14 +143,19 @@ def test_knob_overrides_take_effect(engine: BulletEngine, b2: Scenario) -> None:
 
 
 def test_time_step_longer_than_output_interval(engine: BulletEngine, b2: Scenario) -> None:
-    # the paper's 240 fps without sub-steps: Δt = 4.2 ms > the 1 ms output interval;
-    # samples are interpolated onto the output clock and the rocking is still Housner's
-    traj = engine.simulate(b2, {"fps": 240.0, "substeps": 0})
+    # the paper's 240 fps without sub-steps: Δt = 4.2 ms. Against the 1 ms output
+    # interval it is refused (the output would claim a resolution the physics lacks);
+    # at 240 samples/s, one step per sample, the rocking is still Housner's
+    with pytest.raises(SettingsError, match="longer than the output interval"):
+        engine.simulate(b2, {"fps": 240.0, "substeps": 0})
+    coarse = b2.replace(output_rate=240.0)
+    traj = engine.simulate(coarse, {"fps": 240.0, "substeps": 0})
     assert traj.status is Status.OK
-    np.testing.assert_allclose(np.diff(traj.t), 1e-3)
+    np.testing.assert_allclose(np.diff(traj.t), 1 / 240)
     assert traj.settings["effective_timestep"] == pytest.approx(1 / 240)
     first = impact_times(traj)[0]
-    assert first == pytest.approx(float(impact_times(single_block_reference(b2))[0]), rel=0.03)
+    ref = single_block_reference(coarse)
+    assert first == pytest.approx(float(impact_times(ref)[0]), rel=0.03)
 
 
 def test_mesh_stack_unsupported(engine: BulletEngine) -> None:

@@ -110,7 +110,7 @@ def test_prism_obj_is_the_extruded_profile() -> None:
 
 
 def test_knob_overrides_take_effect() -> None:
-    sc = Scenario("free-b2-short", B2, initial_tilt=0.5, duration=0.8)
+    sc = Scenario("free-b2-short", B2, initial_tilt=0.5, duration=0.8, output_rate=250.0)
     eng = DrakeEngine()
     fine = eng.simulate(sc, "fast")
     coarse = eng.simulate(sc, {"preset": "fast", "timestep": "2e-3"})

@@ -18,7 +18,7 @@ from types import ModuleType
 from typing import NoReturn
 
 import rockbench
-from rockbench.cli.common import apply_memory_budget
+from rockbench.cli.common import memory_budget
 from rockbench.errors import RockbenchError
 
 __all__ = ["main", "build_parser", "commands"]
@@ -75,8 +75,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
-        apply_memory_budget(args)
-        return int(args._execute(args))
+        with memory_budget(args):
+            return int(args._execute(args))
     except RockbenchError as exc:
         print(f"rockbench: error: {exc}", file=sys.stderr)
         return 2

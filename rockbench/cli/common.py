@@ -12,13 +12,13 @@ from __future__ import annotations
 import argparse
 import contextlib
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
 from rockbench.errors import RockbenchError
 
-__all__ = ["selected_engines", "add_engine_arguments", "apply_memory_budget",
+__all__ = ["selected_engines", "add_engine_arguments", "memory_budget",
            "add_settings_arguments", "engine_settings", "Progress",
            "add_run_arguments", "add_store_arguments", "add_parallel_arguments",
            "check_parallel_arguments", "execution_options", "open_store", "check_output_path"]
@@ -38,8 +38,10 @@ def add_engine_arguments(p: argparse.ArgumentParser, default: str = "all") -> No
                         "is refused before it runs")
 
 
-def apply_memory_budget(args: argparse.Namespace) -> None:
-    """Pass ``--max-memory`` to this process and every engine child (``ROCKBENCH_MAX_MEMORY``).
+@contextlib.contextmanager
+def memory_budget(args: argparse.Namespace) -> Iterator[None]:
+    """While a command runs, pass ``--max-memory`` to this process and every engine child
+    (``ROCKBENCH_MAX_MEMORY``); the previous value is restored afterwards.
 
     Raises
     ------
@@ -53,10 +55,19 @@ def apply_memory_budget(args: argparse.Namespace) -> None:
 
     gb = getattr(args, "max_memory", None)
     if gb is None:
+        yield
         return
     if not (math.isfinite(gb) and gb > 0):
         raise RockbenchError(f"--max-memory must be a positive number of GB, got {gb:g}")
+    old = os.environ.get(BUDGET_ENV)
     os.environ[BUDGET_ENV] = repr(gb)
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop(BUDGET_ENV, None)
+        else:
+            os.environ[BUDGET_ENV] = old
 
 
 def selected_engines(spec: str, *, include_analytic: bool = True) -> list[str]:

@@ -31,7 +31,7 @@ from rockbench.errors import RockbenchError
 from rockbench.evaluation import RunResult
 from rockbench.method import REFERENCE, Method, slug
 from rockbench.runner import ExecutionOptions, Job, run_jobs
-from rockbench.scenarios import Scenario, get_scenario, scenario_to_dict
+from rockbench.scenarios import Scenario, scenario_to_dict
 from rockbench.store import Store
 from rockbench.studies import sensitivity as sens
 from rockbench.studies.recording import measure, record_run, settings_hash
@@ -186,7 +186,7 @@ def _plan(opts: CompareOptions) -> tuple[list[PlannedRun], list[Method], Scenari
     variations: list[sens.Variation] = []
     skipped: list[sens.Skipped] = []
     if opts.sensitivity:
-        b0 = get_scenario(sens.SCENARIO)
+        b0 = sens.sensitivity_scenario()
         base = {e: {"preset": opts.presets[0], **opts.overrides.get(e, {})} for e in engines}
         planned, variations, skipped = sens.plan_sensitivity(engines, base=base)
         if not any(r.method.is_reference and r.scenario.name == b0.name for r in runs):

@@ -20,18 +20,30 @@ from typing import Any
 
 from rockbench.engines import Engine, engine_class
 from rockbench.method import REFERENCE, Method
+from rockbench.scenarios import Scenario, get_scenario
 
 __all__ = ["Knob", "KNOBS", "Variation", "Skipped", "map_knob", "plan_sensitivity",
-           "SUITE", "SCENARIO", "SUBSTEP_FPS", "RATE_SUBSTEPS"]
+           "SUITE", "SCENARIO", "OUTPUT_RATE", "SUBSTEP_FPS", "RATE_SUBSTEPS",
+           "sensitivity_scenario"]
 
 #: The pseudo-suite name that runs only the sensitivity study.
 SUITE = "paper-sensitivity"
-#: The scenario varied (the paper's B0).
+#: The catalog scenario varied (the paper's B0).
 SCENARIO = "free-b0"
+#: Output rate of the study (samples/s): the paper's coarsest settings step up to
+#: 1/((2 + 1)·60 fps) = 5.6 ms (1/120 s in Blender), and no engine may step longer than
+#: the output interval, so the study samples at 100 per second instead of the catalog's 1000.
+OUTPUT_RATE = 100.0
 #: Frame rate assumed when sub-steps map onto a time step.
 SUBSTEP_FPS = 60.0
 #: Sub-steps assumed when a frame rate maps onto a time step.
 RATE_SUBSTEPS = 20
+
+
+def sensitivity_scenario() -> Scenario:
+    """B0 free rocking as the study runs it: the catalog case at :data:`OUTPUT_RATE`."""
+    b0 = get_scenario(SCENARIO)
+    return b0.replace(name=f"{SCENARIO}-sensitivity", output_rate=OUTPUT_RATE)
 
 
 @dataclass(frozen=True)
