@@ -199,6 +199,8 @@ class Engine(ABC):
             Unknown preset or knob, or a value of the wrong type.
         """
         base = cls.Settings()
+        if preset is not None and not isinstance(preset, str):
+            raise SettingsError(f"preset of {cls.name!r} must be a preset name, got {preset!r}")
         if preset not in (None, "default"):
             if preset not in cls.presets:
                 raise SettingsError(
