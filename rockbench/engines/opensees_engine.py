@@ -78,8 +78,9 @@ within −18 to +16 % of the two-block model (worst near uplift, 3.3 Hz / 4 mm).
 the third impact with impact times within 2.2 % (over 20 s up to 0.20 λ, on
 B0, which it brings to rest early) and pulse peaks 2.4–6.3 % low, at a tenth
 of the cost. A stiffer contact shortens the tail error (f_c = 2 kHz,
-Δt = 25 µs: B0 0.009 λ) but delays the first impacts by up to 0.4 % at twice
-the cost. A Winkler bed of 10 points per interface (the ``winkler`` preset)
+Δt = 25 µs: B0 0.009 λ over 20 s) but then needs a smaller step: at 25 µs the
+first impacts are up to 0.4 % late, at 12.5 µs within 0.03 % (B2), four times
+the cost of ``accurate``. A Winkler bed of 10 points per interface (the ``winkler`` preset)
 spreads each impact over the whole face, and no single ζ matches Housner's η
 on all blocks (B0 and B1 need ζ ≈ 3.5, B3 ≈ 5 at f_c = 500 Hz, with impact
 times moving by several per cent between neighbouring ζ). The contact
