@@ -61,18 +61,18 @@ CASES = {
 }
 
 
-#: Engine presets: pymunk's accurate one (its fast one, dt 1 ms, moves early: the parapet's
-#: onset at 0.116 against 0.125); MuJoCo's fast one, whose onsets are those of its accurate
-#: preset within 0.1 % (b2 0.504, parapet 0.1285, column 0.2449 against 0.2451) at a
-#: tenth of the cost.
-PRESETS = {"pymunk": "accurate", "mujoco": "fast"}
+#: Engine settings: pymunk at dt 0.1 ms (its fast preset, dt 1 ms, moves early: the
+#: parapet's onset at 0.1065 against 0.125); MuJoCo's fast preset, whose onsets are those
+#: of its accurate preset within 0.1 % (b2 0.504, parapet 0.1285, column 0.2449 against
+#: 0.2451) at a tenth of the cost.
+SETTINGS = {"pymunk": {"timestep": 1e-4}, "mujoco": {"preset": "fast"}}
 
 
-@pytest.fixture(scope="module", params=list(PRESETS))
+@pytest.fixture(scope="module", params=list(SETTINGS))
 def comparisons(request):
     engine = request.param
     return engine, tilting_table(list(CASES.values()), engine, rate=RATE,
-                                 settings={"preset": PRESETS[engine]},
+                                 settings=SETTINGS[engine],
                                  execution=ExecutionOptions(isolate=False))
 
 
@@ -108,7 +108,7 @@ def test_tilting_table_moves_the_mechanisms_blocks_the_mechanisms_way(comparison
 
 def test_parapet_tilted_the_other_way_holds_to_its_longer_lever():
     (c,) = tilting_table([CASES["parapet"]], "pymunk", rate=RATE, direction=-1,
-                         execution=ExecutionOptions(isolate=False))
+                         settings=SETTINGS["pymunk"], execution=ExecutionOptions(isolate=False))
     assert c.limit.load_factor == pytest.approx(0.375, rel=1e-7)
     assert -UNDERSHOOT <= c.error <= OVERSHOOT and c.mechanism_matches
     assert c.half.rotation_sign == (-1,)
@@ -118,7 +118,8 @@ def test_parapet_tilted_the_other_way_holds_to_its_longer_lever():
 def test_thin_arch_opens_its_four_hinge_mechanism_at_the_lp_factor():
     # t/R = 0.15, not far above the minimum 0.1075: the contacts settle first (SETTLE)
     sc = get_scenario("arch-9v-t0.15")
-    (c,) = tilting_table([sc], "pymunk", rate=RATE, execution=ExecutionOptions(isolate=False))
+    (c,) = tilting_table([sc], "pymunk", rate=RATE, settings=SETTINGS["pymunk"],
+                         execution=ExecutionOptions(isolate=False))
     assert c.limit.load_factor == pytest.approx(0.1464, abs=1e-4)
     assert -UNDERSHOOT <= c.error <= OVERSHOOT and quasi_static(c, HALVING)
     assert c.mechanism_matches
