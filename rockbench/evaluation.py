@@ -86,8 +86,8 @@ def sliding(traj: Trajectory, scenario: Scenario) -> float | None:
     sliding or drift of the contact. Only samples where the block is within its
     critical angle count (an overturning block slides when it lands).
     """
-    if traj.t.size == 0 or not np.all(np.isfinite(traj.x[:, 0])):
-        return None
+    if scenario.is_assembly or traj.t.size == 0 or not np.all(np.isfinite(traj.x[:, 0])):
+        return None  # (an assembly's blocks have no single base pivot to slide on)
     b = scenario.blocks[0]
     th = traj.theta[:, 0]
     sgn = np.sign(th)
@@ -118,7 +118,7 @@ def interface_motion(traj: Trajectory,
         None for a single block or a trajectory without finite positions.
     """
     nb = scenario.n_blocks
-    if nb < 2 or traj.t.size == 0:
+    if nb < 2 or traj.t.size == 0 or scenario.is_assembly:
         return None, None
     if not (np.all(np.isfinite(traj.x)) and np.all(np.isfinite(traj.z))):
         return None, None

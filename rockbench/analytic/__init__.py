@@ -74,7 +74,10 @@ __all__ = [
 
 
 def has_reference(scenario: Scenario) -> bool:
-    """True if an analytic model exists for this scenario (1 or 2 centred blocks)."""
+    """True if an analytic model exists for this scenario (1 or 2 centred blocks; a block
+    assembly has its static limit-analysis reference, no dynamic one)."""
+    if scenario.is_assembly:
+        return False
     return scenario.n_blocks <= 2 and not any(scenario.stack.offsets)
 
 

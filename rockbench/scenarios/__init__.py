@@ -9,6 +9,7 @@ from rockbench.scenarios.excitation import (
     Record,
     SinePulse,
     Sinusoid,
+    TiltTable,
     excitation_class,
     excitation_from_table,
     excitation_kinds,
@@ -17,9 +18,12 @@ from rockbench.scenarios.model import Block, Contact, RockingProperties, Scenari
 
 __all__ = [
     "Block", "Stack", "Contact", "Scenario", "RockingProperties",
+    "Assembly", "Prism", "Support", "TiltTable",
     "Excitation", "Free", "SinePulse", "CosinePulse", "Sinusoid", "Record", "STANDARD_GRAVITY",
     "REPORT_GROUPS", "excitation_kinds", "excitation_class", "excitation_from_table",
 ]
+# after the model: assembly imports it (and the model imports assembly at its end)
+from rockbench.scenarios.assembly import Assembly, Prism, Support  # noqa: E402
 from rockbench.scenarios.catalog import (  # noqa: E402
     catalog,
     get_scenario,
