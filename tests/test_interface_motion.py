@@ -212,7 +212,6 @@ def test_interface_friction_round_trips_and_leaves_old_files_alone(tmp_path):
 # ---------------------------------------------------------------- engines on interface slip
 #: (engine) → measured reason: upper-block slip error, max |Δs| / max |s_ref|.
 IF_KNOWN = {
-    "bullet": "upper-block slip error 1.7 % (lower block 0.04 %)",
     "drake": "upper-block slip error 18.7 %: it slips 0.0109 m against the exact 0.0119 m",
 }
 

@@ -15,7 +15,8 @@ Measured pitfalls this module works around (see docs/engine-notes.md):
 * Default linear/angular damping is 0.04: set to 0.
 * ``contactBreakingThreshold`` (default 0.02 m) keeps the lifted pivot's contact
   points in the manifold while the edge is less than 2 cm above the ground; this
-  perturbs every rocking cycle (0.02–0.1 λ error on B0). It is a *process-global*
+  perturbs every rocking cycle (0.02–0.1 λ error on B0; 1e-4 m is the default
+  here). It is a *process-global*
   variable in Bullet, so it is set on every build. ``contactSlop`` (default
   1e-3 m) lets contacts sink; 0 is far more accurate.
 * A mass-0 body in maximal coordinates is a static btRigidBody: the solver ignores
@@ -84,6 +85,15 @@ class BulletSettings(EngineSettings):
         (``GEOM_MESH`` + ``GEOM_FORCE_CONCAVE_TRIMESH``). Bullet collides a dynamic
         concave mesh only with convex shapes, so "mesh" supports single blocks
         only (a stack raises :class:`UnsupportedScenario`).
+    chamfer_shape : {"hull", "narrow_box"}
+        Collision shape of a chamfered block. ``"hull"``: the convex hull of the
+        chamfered prism (Bullet's convex–convex collision keeps one new point per
+        step in the manifold: the paper stack at rest is held at a single point,
+        the face centre, at each contact, counted with ``getContactPoints``; its
+        pulses are 20 % off). ``"narrow_box"`` (default): a box of width w − 2c
+        (the chamfered prism's bottom and top faces, hence its rocking pivots,
+        exactly), collided by Bullet's box–box routine, which gives the four
+        corners of each face at once.
     collision_margin : float or None
         Collision margin of the block shapes in m (paper: 1e-3, 1e-5, 1e-6);
         None keeps pybullet's default (1e-3 m). Convex hulls are inflated by it.
@@ -91,7 +101,10 @@ class BulletSettings(EngineSettings):
         Separating-axis test for convex hulls (full contact manifolds).
     contact_breaking_threshold : float
         Distance (m) beyond which manifold points are dropped (Bullet default
-        0.02; 1e-3 is far more accurate for rocking, see the module docstring).
+        0.02; 1e-3 is far more accurate for rocking, see the module docstring;
+        1e-4 for the paper stack, whose lifted upper block otherwise keeps stale
+        points on the lower one: stack pulses 7.7 % off at 1e-3 with the narrow
+        box, 0.85 % at 1e-4).
     contact_slop : float
         Penetration (m) tolerated without correction (Bullet default 1e-3).
     erp, contact_erp, friction_erp : float
@@ -107,6 +120,10 @@ class BulletSettings(EngineSettings):
         Friction cone instead of Bullet's two-direction friction pyramid.
     maximal_coordinates : bool
         Blocks as ``btRigidBody`` (True, ~2× faster) or free-floating ``btMultiBody``.
+    friction_anchor : bool
+        Bullet's friction anchors (``changeDynamics(frictionAnchor=1)``): a
+        sticking contact point keeps its first position and the friction
+        constraint pulls the bodies back to it, instead of letting them creep.
     restitution : float or None
         Restitution of every contact; None uses the scenario's. Bullet multiplies
         the bodies' coefficients, so each body gets its square root.
@@ -121,9 +138,10 @@ class BulletSettings(EngineSettings):
     solver: Literal["si", "pgs", "dantzig"] = "si"
     solver_residual_threshold: float = 1e-7
     collision_shape: Literal["box", "convex", "mesh"] = "box"
+    chamfer_shape: Literal["hull", "narrow_box"] = "narrow_box"
     collision_margin: float | None = None
     enable_sat: bool = False
-    contact_breaking_threshold: float = 1e-3
+    contact_breaking_threshold: float = 1e-4
     contact_slop: float = 0.0
     erp: float = 0.2
     contact_erp: float = 0.2
@@ -133,6 +151,7 @@ class BulletSettings(EngineSettings):
     warm_starting_factor: float = 0.85
     cone_friction: bool = True
     maximal_coordinates: bool = True
+    friction_anchor: bool = False
     restitution: float | None = None
     restitution_velocity_threshold: float = 0.2
 
@@ -168,10 +187,12 @@ class BulletEngine(Engine):
                                                          chamfer=True)
     Settings: ClassVar[type[EngineSettings]] = BulletSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
-        # 0.1 ms steps (fps 1000 × 10 sub-steps): ≤ 5e-3 λ on the free-rocking catalog
+        # 0.1 ms steps (fps 1000 × 10 sub-steps): ≤ 5e-3 λ on the free-rocking catalog;
+        # the paper stack within 0.85 % on its pulses (benchmarks/stack_convergence.py)
         "accurate": {},
-        # 1 ms steps, no sub-steps: ≤ 0.05 λ at ~10× less cost
-        "fast": {"substeps": 0},
+        # 1 ms steps, no sub-steps: ≤ 0.05 λ at ~10× less cost (calibrated with the hull
+        # and the 1 mm breaking threshold, kept)
+        "fast": {"substeps": 0, "chamfer_shape": "hull", "contact_breaking_threshold": 1e-3},
     }
     requires: ClassVar[tuple[str, ...]] = ("pybullet",)
     extra: ClassVar[str] = "bullet"
@@ -226,6 +247,8 @@ class BulletEngine(Engine):
         self._substeps = 0
         self._margin = s.collision_margin
         self._shape = s.collision_shape
+        self._chamfer_shape = s.chamfer_shape
+        self._anchor = s.friction_anchor
         # hulls/meshes: the margin actually applied (pybullet's default is 1e-3 m)
         self._hull_margin = _DEFAULT_HULL_MARGIN if s.collision_margin is None \
             else s.collision_margin
@@ -281,6 +304,9 @@ class BulletEngine(Engine):
         hy = 0.5 * blk.depth
         if self._is_box(blk):
             shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=(blk.b, hy, blk.h), **kw)
+        elif self._narrow(blk):
+            shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=(blk.pivot_half_width, hy,
+                                                                      blk.h), **kw)
         else:
             # Bullet inflates hulls and triangles by the collision margin: shrink the
             # prism by it so that the swept shape has the block's faces exactly
@@ -301,6 +327,10 @@ class BulletEngine(Engine):
     def _is_box(self, blk: Any) -> bool:
         return self._shape == "box" and blk.chamfer == 0.0
 
+    def _narrow(self, blk: Any) -> bool:
+        return self._chamfer_shape == "narrow_box" and blk.chamfer > 0.0 \
+            and self._shape != "mesh"
+
     def _set_dynamics(self, body: int, mu: float, rest: float, blk: Any) -> None:
         pb, kw = self._pb, self._kw
         extra: dict[str, Any] = {}
@@ -308,9 +338,11 @@ class BulletEngine(Engine):
             # box inertia (chamfer corners neglected, as the analytic models do);
             # the mass must be repeated or maximal-coordinate bodies lose it
             extra = {"mass": blk.m, "localInertiaDiagonal": tuple(float(i) for i in blk.inertia)}
-            if self._margin is not None or not self._is_box(blk):
-                extra["collisionMargin"] = self._hull_margin if not self._is_box(blk) \
-                    else self._margin
+            if self._anchor:
+                extra["frictionAnchor"] = 1
+            boxed = self._is_box(blk) or self._narrow(blk)
+            if self._margin is not None or not boxed:
+                extra["collisionMargin"] = self._hull_margin if not boxed else self._margin
         pb.changeDynamics(body, -1, lateralFriction=mu, restitution=rest, rollingFriction=0.0,
                           spinningFriction=0.0, linearDamping=0.0, angularDamping=0.0,
                           activationState=pb.ACTIVATION_STATE_DISABLE_SLEEPING, **extra, **kw)

@@ -1,0 +1,290 @@
+"""Convergence of the engines on the paper's two-block stack (issue 15 item 3).
+
+``python -m benchmarks.stack_convergence [--quick] [--engines a,b] [--out FILE]``
+
+For each 3D engine (MuJoCo, Bullet, DART, Drake) and pymunk, the time step is
+refined from coarse to fine, the other knobs at their ``accurate`` values, until
+the results stop changing (converged: the worst peak errors move by less than
+:data:`CONVERGED` between two steps) or a step costs more than the cap; then the
+contact knobs that matter are varied one at a time at the ``accurate`` step.
+Cases: the eight stack pulses (4 s) and the two well-posed stack sinusoids
+(5 Hz / 2 mm and 4 mm, 10 s; the other six are chaotic, see issue 15).
+
+Per engine and setting it records, against the analytic two-block solution:
+the worst relative error of either block's peak |θ|/λ over the pulses whose
+reference peak is at least :data:`PEAK_MIN` λ and over the two sinusoids (the
+acceptance limits are 2 % and 5 %), the worst max |Δθ|/λ up to the reference's
+third impact (``max_error_early``), the largest interface slip and gap
+(:func:`rockbench.evaluation.interface_motion`) and the CPU time of all the
+runs. The Markdown section replaces the section of the same title in
+``benchmarks/RESULTS.md`` (the other sections are kept), or is appended.
+Runs are in this process, one after the other (``nice`` it on a shared machine).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from benchmarks import engine_status, load
+from rockbench.analytic import reference
+from rockbench.engines import engine_class
+from rockbench.evaluation import RunMetrics, evaluate_run
+from rockbench.runner import Job, run_job
+from rockbench.scenarios import get_scenario, get_suite
+from rockbench.trajectory import Trajectory
+
+__all__ = ["Variant", "Row", "LADDERS", "KNOBS", "evaluate", "study", "markdown", "run", "main"]
+
+TITLE = "## Stack convergence (issue 15)"
+HERE = Path(__file__).resolve().parent
+#: The two stack sinusoids that are well-posed over their whole 10 s.
+SINES = ("stack-sine-5.0hz-2mm", "stack-sine-5.0hz-4mm")
+#: Pulses whose reference peak is below this (fraction of λ) are not judged.
+PEAK_MIN = 0.02
+#: Acceptance limits on the relative peak errors (pulses, sinusoids).
+PULSE_TOL, SINE_TOL = 0.02, 0.05
+#: Converged: both worst peak errors change by less than this between two steps.
+CONVERGED = 0.005
+#: A step whose runs cost more CPU than this (s) is the last one refined.
+COST_CAP = 150.0
+
+
+@dataclass(frozen=True)
+class Variant:
+    """One engine setting: knob overrides on top of the ``accurate`` preset."""
+
+    engine: str
+    label: str
+    settings: dict[str, Any]
+    ladder: bool = True  # a time-step refinement (False: a knob variant)
+
+
+@dataclass(frozen=True)
+class Row:
+    """The results of one variant over the cases (see the module docstring)."""
+
+    variant: Variant
+    pulse: float  # worst |peak error| over judged pulses
+    sine: float  # worst |peak error| over the two sinusoids
+    early: float  # worst max |Δθ|/λ to the reference's third impact
+    slip: float
+    gap: float
+    cpu: float
+    per_case: dict[str, tuple[float | None, ...]] = field(default_factory=dict)
+    bad: tuple[str, ...] = ()  # cases whose status is not ok
+
+    @property
+    def accepted(self) -> bool:
+        """Within 2 % on the pulses and 5 % on the sinusoids, every run ok."""
+        return self.pulse <= PULSE_TOL and self.sine <= SINE_TOL and not self.bad
+
+
+def _steps(key: str, values: tuple[float, ...], **extra: Any) -> list[dict[str, Any]]:
+    return [{key: v, **extra} for v in values]
+
+
+#: Time-step ladders (coarse to fine), the rest of the accurate preset kept.
+LADDERS: dict[str, list[dict[str, Any]]] = {
+    "mujoco": _steps("timestep", (2e-4, 1e-4, 5e-5, 2.5e-5)),
+    "bullet": _steps("substeps", (4, 9, 19, 39)),  # dt = 1 / ((n + 1) 1000 Hz)
+    "dart": _steps("timestep", (1e-4, 5e-5, 2.5e-5, 1e-5)),
+    "drake": _steps("timestep", (1e-3, 5e-4, 2.5e-4)),
+    "pymunk": _steps("timestep", (1e-4, 5e-5, 2e-5, 1e-5)),
+}
+#: Contact knobs varied one at a time at the accurate step (each engine's measured levers).
+KNOBS: dict[str, list[dict[str, Any]]] = {
+    "mujoco": [{"noslip_iterations": 20}, {"cone": "pyramidal"}, {"impratio": 1.0},
+               {"timeconst_factor": 3.0}, {"timeconst_factor": 4.0},
+               {"integrator": "implicitfast"}, {"multiccd": False}],
+    "bullet": [{"chamfer_shape": "hull"}, {"contact_breaking_threshold": 1e-3},
+               {"friction_anchor": True}, {"solver_iterations": 500},
+               {"warm_starting_factor": 0.0}],
+    "dart": [{"split_impulse": True}],
+    "drake": [{"contact_approximation": "tamsi"}, {"collision_slices": 1},
+              {"contact_approximation": "lagged", "near_rigid_threshold": 0.0}],
+    "pymunk": [{"iterations": 100}],
+}
+
+
+def _label(settings: dict[str, Any]) -> str:
+    return ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
+                     for k, v in settings.items())
+
+
+def variants(engine: str, *, quick: bool = False) -> list[Variant]:
+    """The ladder then the knob variants of ``engine``."""
+    ladder = LADDERS[engine][:3] if quick else LADDERS[engine]
+    knobs = KNOBS[engine][:1] if quick else KNOBS[engine]
+    return ([Variant(engine, _label(s), s) for s in ladder]
+            + [Variant(engine, _label(s), s, ladder=False) for s in knobs])
+
+
+def cases(quick: bool = False) -> list[str]:
+    """The stack pulses and the two well-posed sinusoids (quick: three pulses, one sine)."""
+    pulses = get_suite("paper-stack-pulse")
+    if quick:
+        return ["stack-pulse-4.0hz-5mm", "stack-pulse-5.0hz-4mm", "stack-pulse-6.5hz-2mm",
+                SINES[0]]
+    return [*pulses, *SINES]
+
+
+_REFS: dict[str, Trajectory] = {}
+
+
+def _reference(name: str) -> Trajectory:
+    if name not in _REFS:
+        _REFS[name] = reference(get_scenario(name))
+    return _REFS[name]
+
+
+def evaluate(variant: Variant, names: list[str]) -> Row:
+    """Run ``variant`` on the cases and summarise (see :class:`Row`)."""
+    preset = dict(engine_class(variant.engine).presets["accurate"])
+    settings = {**preset, **variant.settings}
+    pulse = sine = early = slip = gap = cpu = 0.0
+    per_case: dict[str, tuple[float | None, ...]] = {}
+    bad = []
+    for name in names:
+        sc = get_scenario(name)
+        ref = _reference(name)
+        c0 = time.process_time()
+        tr = run_job(Job(sc, variant.engine, settings))
+        cpu += time.process_time() - c0
+        m: RunMetrics = evaluate_run(sc, tr, ref)
+        per_case[name] = m.peak_errors
+        if m.status.value != "ok":
+            bad.append(f"{name}: {m.status}")
+            continue
+        errs = [abs(e) for e in m.peak_errors if e is not None]
+        worst = max(errs) if errs else math.inf
+        ref_peak = max(p for p in evaluate_run(sc, ref, None, is_reference=True).peaks
+                       if p is not None)
+        if name in SINES:
+            sine = max(sine, worst)
+        elif ref_peak >= PEAK_MIN:
+            pulse = max(pulse, worst)
+        early = max(early, m.max_error_early or 0.0)
+        slip = max(slip, m.interface_slip or 0.0)
+        gap = max(gap, m.interface_gap or 0.0)
+    return Row(variant, pulse, sine, early, slip, gap, cpu, per_case, tuple(bad))
+
+
+def _converged(a: Row, b: Row) -> bool:
+    return abs(a.pulse - b.pulse) < CONVERGED and abs(a.sine - b.sine) < CONVERGED
+
+
+def study(engines: list[str], *, quick: bool = False, cap: float = COST_CAP,
+          log: Any = sys.stderr) -> list[Row]:
+    """Refine each engine's step until converged or over the cost cap, then vary its knobs."""
+    names = cases(quick)
+    rows: list[Row] = []
+    for engine in engines:
+        prev: Row | None = None
+        stop = False
+        for v in variants(engine, quick=quick):
+            if v.ladder and stop:
+                continue
+            row = evaluate(v, names)
+            rows.append(row)
+            print(f"[stack_convergence] {engine} {v.label}: pulses {row.pulse:.2%}, sines "
+                  f"{row.sine:.2%}, early {row.early:.4f} λ, slip {row.slip:.1e} m, "
+                  f"gap {row.gap:.1e} m, {row.cpu:.0f} s CPU", file=log, flush=True)
+            if v.ladder:
+                stop = row.cpu > cap or (prev is not None and _converged(prev, row))
+                prev = row
+    return rows
+
+
+def _pct(x: float | None) -> str:
+    return "–" if x is None or not math.isfinite(x) else f"{100 * x:+.1f}"
+
+
+def markdown(rows: list[Row], names: list[str], header: str = "") -> str:
+    """The Markdown section: a summary table and the per-case peak errors."""
+    out = [TITLE, "", header,
+           "",
+           f"Worst relative peak error of either block over the stack pulses whose reference "
+           f"peak is ≥ {PEAK_MIN} λ (limit {PULSE_TOL:.0%}) and over the sinusoids "
+           f"{', '.join(SINES)} (limit {SINE_TOL:.0%}); *early*: worst max |Δθ|/λ up to the "
+           "reference's third impact; interface slip and gap: largest departure of the upper "
+           "block from rigid no-slip rocking on the lower one (m); CPU: all the runs of the "
+           "row. Settings are overrides of the engine's `accurate` preset; ✓ marks a row within "
+           "both limits. *Converged* = the worst errors move < 0.5 % between two steps.",
+           "",
+           "| engine | setting | pulses | sines | early (λ) | slip (m) | gap (m) | CPU (s) | |",
+           "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        kind = "" if r.variant.ladder else "knob: "
+        note = "✓" if r.accepted else ("; ".join(r.bad) if r.bad else "")
+        out.append(f"| {r.variant.engine} | {kind}{r.variant.label} | {100 * r.pulse:.1f} % | "
+                   f"{100 * r.sine:.1f} % | {r.early:.4f} | {r.slip:.1e} | {r.gap:.1e} | "
+                   f"{r.cpu:.0f} | {note} |")
+    short = [n.replace("stack-pulse-", "p ").replace("stack-sine-", "s ") for n in names]
+    out += ["", "Per case: peak errors of the bottom / top block (%).", "",
+            "| engine | setting | " + " | ".join(short) + " |",
+            "|---|---|" + "---|" * len(names)]
+    for r in rows:
+        cells = ["/".join(_pct(e) for e in r.per_case.get(n, ())) or "–" for n in names]
+        out.append(f"| {r.variant.engine} | {r.variant.label} | " + " | ".join(cells) + " |")
+    return "\n".join(out) + "\n"
+
+
+def run(quick: bool = False, engines: list[str] | None = None) -> tuple[str, dict]:
+    """Markdown section and raw rows (the interface of the ``benchmarks`` sections)."""
+    wanted = engines or ["mujoco", "bullet", "dart", "drake", "pymunk"]
+    avail = [e for e in wanted if engine_status(e)[0]]
+    missing = [e for e in wanted if e not in avail]
+    start, load0 = time.perf_counter(), load()
+    rows = study(avail, quick=quick)
+    header = (f"Generated by `python -m benchmarks.stack_convergence"
+              f"{' --quick' if quick else ''}` in {time.perf_counter() - start:.0f} s "
+              f"({load0} at the start)."
+              + (f" Not available: {', '.join(missing)}." if missing else ""))
+    text = markdown(rows, cases(quick), header)
+    return text, {"rows": rows}
+
+
+def write_section(text: str, path: Path) -> None:
+    """Replace the section titled :data:`TITLE` in ``path`` (up to the next ``## ``) or append."""
+    old = path.read_text(encoding="utf-8") if path.exists() else ""
+    if TITLE in old:
+        head, rest = old.split(TITLE, 1)
+        nxt = rest.find("\n## ")
+        tail = rest[nxt + 1:] if nxt >= 0 else ""
+        new = head + text + ("\n" + tail if tail else "")
+    else:
+        new = old.rstrip("\n") + ("\n\n" if old else "") + text
+    path.write_text(new, encoding="utf-8")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.stack_convergence",
+                                 description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true",
+                    help="three pulses and one sinusoid, three steps, one knob per engine")
+    ap.add_argument("--engines", default="mujoco,bullet,dart,drake,pymunk",
+                    help="comma list of engines")
+    ap.add_argument("--out", type=Path, default=HERE / "RESULTS.md",
+                    help="Markdown file whose stack-convergence section is replaced")
+    args = ap.parse_args(argv)
+    engines = [e.strip() for e in args.engines.split(",") if e.strip()]
+    bad = [e for e in engines if e not in LADDERS]
+    if bad:
+        print(f"python -m benchmarks.stack_convergence: unknown engine(s) {', '.join(bad)}; "
+              f"choose from {', '.join(LADDERS)}", file=sys.stderr)
+        return 2
+    text, _ = run(quick=args.quick, engines=engines)
+    write_section(text, args.out)
+    print(text)
+    print(f"[stack_convergence] wrote {args.out}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
