@@ -14,8 +14,19 @@ engine jobs.
 Executors
 ---------
 ``"process"`` (default)
-    A local :class:`pebble.ProcessPool`; every job gets a fresh child process
-    (``max_tasks=1``) that is killed when it exceeds its time limit.
+    Local :class:`pebble.ProcessPool` s of *warm* workers, one pool per engine:
+    a worker imports its engine once and runs many jobs (``max_tasks=0``), and
+    at most ``jobs`` runs are in flight over all pools. A run that exceeds its
+    time limit has its worker killed; a worker that dies (segfault, abort,
+    ``os._exit``, SIGKILL from outside, the memory limit) fails its run with
+    ``ProcessExpired``. Either way only the run in flight gets the status
+    (``timeout`` / ``crashed``) and pebble starts a fresh worker for the next
+    runs. Each worker dies with the study (:func:`die_with_parent`) and has an
+    address-space limit (``ExecutionOptions.worker_memory``), so a memory
+    blow-up is a ``MemoryError`` or a dead worker, not the machine's
+    out-of-memory killer. Engines that keep global state between runs declare
+    ``Engine.fresh_process = True`` and get a fresh child for every run, as
+    does every engine with ``ExecutionOptions(warm=False)``.
 ``"dask"``
     The same jobs as tasks on a Dask distributed cluster (``pip install
     'rockbench[dask]'``). Each task starts the engine run in a fresh Python
@@ -37,9 +48,10 @@ import sys
 import tempfile
 import time
 import traceback
+from collections import Counter, deque
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from concurrent.futures import FIRST_COMPLETED, wait
 from concurrent.futures import TimeoutError as FutureTimeout
-from concurrent.futures import as_completed
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -50,19 +62,24 @@ from pebble import ProcessExpired, ProcessPool
 from rockbench.bounds import check_trajectory
 from rockbench.engines import engine_class, get_engine, register
 from rockbench.errors import RockbenchError, UnknownEngine
-from rockbench.limits import check_memory
+from rockbench.limits import check_memory, memory_budget
 from rockbench.method import Method
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = ["Job", "ExecutionOptions", "ExecutionError", "TaskFault", "run_job", "run_jobs",
            "map_tasks", "default_jobs", "run_job_subprocess", "dask_client", "EXECUTORS",
-           "DEFAULT_TIMEOUT"]
+           "DEFAULT_TIMEOUT", "WORKER_HEADROOM_GB", "WorkerGroup", "limit_memory"]
 
 #: Names accepted by ``ExecutionOptions(executor=...)`` and ``--executor``.
 EXECUTORS = ("process", "dask")
 #: Time limit of a run when none is given (s): every run has one.
 DEFAULT_TIMEOUT = 600.0
+#: Address space a worker may map beyond the per-run memory budget, in GB. The
+#: engines' libraries map 0.15-0.5 GB (VmPeak of one run, measured for mujoco,
+#: bullet, dart, pymunk, drake, dem2d, analytic); the rest is room for thread
+#: stacks and malloc arenas, which count against an address-space limit.
+WORKER_HEADROOM_GB = 6.0
 
 
 class ExecutionError(RockbenchError, ValueError):
@@ -70,15 +87,21 @@ class ExecutionError(RockbenchError, ValueError):
 
 
 def check_execution(jobs: Any, timeout: Any, executor: Any, scheduler: Any, *,
-                    flag: str = "") -> None:
+                    flag: str = "", worker_memory: Any = None) -> None:
     """The one validation of execution options (``flag="--"`` names them as options).
 
     Raises
     ------
     ExecutionError
         ``jobs`` not an integer >= 1, ``timeout`` not a finite number > 0, an
-        unknown executor, or a scheduler without the Dask executor.
+        unknown executor, a scheduler without the Dask executor, or a
+        ``worker_memory`` that is not None or a number of GB > 0.
     """
+    if worker_memory is not None and (
+            isinstance(worker_memory, bool) or not isinstance(worker_memory, (int, float))
+            or math.isnan(worker_memory) or worker_memory <= 0):
+        raise ExecutionError(f"{flag}worker-memory must be a number of GB > 0 (inf: no "
+                             f"limit), got {worker_memory!r}")
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
         raise ExecutionError(f"{flag}jobs must be >= 1, got {jobs!r}")
     if (isinstance(timeout, bool) or not isinstance(timeout, (int, float))
@@ -110,6 +133,15 @@ class ExecutionOptions:
     isolate : bool
         Run each task in a child process (default). ``False`` runs in this
         process: no protection against crashes and hangs, no time limit.
+    warm : bool
+        Reuse local worker processes across runs of the same engine (default),
+        except for engines declaring ``fresh_process``; ``False`` gives every
+        run a fresh child process.
+    worker_memory : float, optional
+        Address-space limit of each local worker process in GB
+        (``RLIMIT_AS``); None (default): the per-run memory budget
+        (:func:`rockbench.limits.memory_budget`) plus
+        :data:`WORKER_HEADROOM_GB`, 8 GB by default; ``math.inf``: no limit.
 
     Raises
     ------
@@ -122,10 +154,19 @@ class ExecutionOptions:
     executor: str = "process"
     scheduler: Any = None
     isolate: bool = True
+    warm: bool = True
+    worker_memory: float | None = None
 
     def __post_init__(self) -> None:
-        check_execution(self.jobs, self.timeout, self.executor, self.scheduler)
+        check_execution(self.jobs, self.timeout, self.executor, self.scheduler,
+                        worker_memory=self.worker_memory)
         object.__setattr__(self, "timeout", float(self.timeout))
+
+    def worker_memory_bytes(self) -> float:
+        """The workers' address-space limit in bytes (``math.inf``: none)."""
+        if self.worker_memory is not None:
+            return float(self.worker_memory) * 1e9
+        return memory_budget() + WORKER_HEADROOM_GB * 1e9
 
 
 @dataclass(frozen=True)
@@ -247,6 +288,30 @@ def die_with_parent(parent: int) -> None:
         os._exit(1)
 
 
+def limit_memory(limit: float) -> None:
+    """Cap this process's address space at ``limit`` bytes (``RLIMIT_AS``; inf: no cap).
+
+    Allocations beyond it fail (``MemoryError`` in Python, ``bad_alloc`` or an
+    abort in C++) instead of growing until the kernel's out-of-memory killer
+    picks a process of the machine. A hard limit below the request is kept.
+    """
+    import resource
+
+    if not math.isfinite(limit):
+        return
+    _, hard = resource.getrlimit(resource.RLIMIT_AS)
+    want = int(limit)
+    if hard != resource.RLIM_INFINITY:
+        want = min(want, hard)
+    resource.setrlimit(resource.RLIMIT_AS, (want, hard))
+
+
+def _init_worker(parent: int, memory: float) -> None:
+    """Initializer of every pool worker: die with the study, cap the address space."""
+    die_with_parent(parent)
+    limit_memory(memory)
+
+
 def _context() -> multiprocessing.context.BaseContext:
     # fork keeps run-time registrations (e.g. test engines) visible in children
     methods = multiprocessing.get_all_start_methods()
@@ -262,9 +327,11 @@ def run_jobs(
 ) -> list[Trajectory]:
     """Run jobs and return their trajectories in the order given.
 
-    Isolated runs get a fresh child process each (locally, or a fresh Python
-    subprocess on a Dask worker); a crash, a hang beyond the time limit or an
-    unpicklable result becomes that job's status.
+    Isolated local runs go to warm worker processes, one pool per engine (a
+    fresh child per run for engines with ``fresh_process`` or with
+    ``execution.warm`` False); on Dask each run is a fresh Python subprocess.
+    A crash, a hang beyond the time limit or an unpicklable result becomes
+    that job's status; the worker is replaced and the other jobs go on.
 
     Parameters
     ----------
@@ -310,11 +377,32 @@ def run_jobs(
         return map_tasks(_subprocess_task, tasks, ex, on_done=done, on_fault=failed)
     if not ex.isolate:
         return map_tasks(run_job, jobs, ex, on_done=done)
-    return map_tasks(_pool_job, jobs, ex, on_done=done, on_fault=failed, fresh=True,
-                     timeout_of=lambda i: limit(jobs[i]))
+    groups = {name: WorkerGroup(name, not ex.warm or _keeps_state(name))
+              for name in {j.engine for j in jobs}}
+    return map_tasks(_pool_job, jobs, ex, on_done=done, on_fault=failed,
+                     timeout_of=lambda i: limit(jobs[i]), group_of=lambda i: groups[jobs[i].engine])
+
+
+def _keeps_state(name: str) -> bool:
+    """Whether engine ``name`` needs a fresh process per run (unknown names: yes,
+    so that the child reports the bad name as before)."""
+    try:
+        return bool(engine_class(name).fresh_process)
+    except UnknownEngine:
+        return True
 
 
 # ---------------------------------------------------------------------- the dispatcher
+@dataclass(frozen=True)
+class WorkerGroup:
+    """Which local workers run a task: tasks of one group share a pool of warm
+    workers (an engine's library imported once per worker) unless ``fresh``, when
+    every task gets a new process."""
+
+    name: str = ""
+    fresh: bool = False
+
+
 @dataclass(frozen=True)
 class TaskFault:
     """Why a task gave no result: ``timeout`` (killed at its limit), ``died`` (the
@@ -333,6 +421,7 @@ def map_tasks(
     on_fault: Callable[[int, TaskFault], Any] | None = None,
     timeout_of: Callable[[int], float | None] | None = None,
     fresh: bool = False,
+    group_of: Callable[[int], WorkerGroup] | None = None,
 ) -> list[Any]:
     """Apply a picklable function to each task, locally or on Dask: the one dispatcher.
 
@@ -359,7 +448,13 @@ def map_tasks(
         enforced by the local pool. On Dask ``fn`` must enforce its own limit
         (:func:`run_jobs` runs each job in a subprocess with one).
     fresh : bool
-        A new worker process for every task (engines keep global state).
+        A new worker process for every task (engines keep global state);
+        default: warm workers that run many tasks.
+    group_of : callable, optional
+        The :class:`WorkerGroup` of task ``index`` (default: one group, fresh
+        as ``fresh``): a local pool per group, at most ``execution.jobs`` tasks
+        in flight over all of them. A worker killed at a time limit or dead
+        fails only its task; its pool starts a new one.
 
     Raises
     ------
@@ -392,34 +487,59 @@ def map_tasks(
     def limit(i: int) -> float | None:
         return timeout_of(i) if timeout_of is not None else ex.timeout
 
-    pool = ProcessPool(max_workers=min(ex.jobs, len(tasks)), max_tasks=1 if fresh else 0,
-                       context=_context(), initializer=die_with_parent,
-                       initargs=(os.getpid(),))
+    group = group_of or (lambda i: WorkerGroup("", fresh))
+    left = Counter(group(i) for i in range(len(tasks)))  # tasks not yet scheduled, per group
+    pools: dict[WorkerGroup, ProcessPool] = {}
+    memory = ex.worker_memory_bytes()
+
+    def schedule(i: int) -> Any:
+        g = group(i)
+        if g not in pools:
+            pools[g] = ProcessPool(max_workers=min(ex.jobs, left[g]),
+                                   max_tasks=1 if g.fresh else 0, context=_context(),
+                                   initializer=_init_worker, initargs=(os.getpid(), memory))
+        fut = pools[g].schedule(fn, args=(tasks[i],), timeout=limit(i))
+        left[g] -= 1
+        if not left[g]:
+            pools[g].close()  # its workers end when their last task is done
+        return fut
+
+    waiting = deque(range(len(tasks)))
+    running: dict[Any, int] = {}
     try:
-        futures = {pool.schedule(fn, args=(task,), timeout=limit(i)): i
-                   for i, task in enumerate(tasks)}
-        for fut in as_completed(futures):
-            i = futures[fut]
-            try:
-                value = fut.result()
-            except FutureTimeout:
-                fault(i, TaskFault("timeout", f"killed after the {limit(i) or 0.0:g} s limit"))
-                continue
-            except ProcessExpired as exc:
-                fault(i, TaskFault("died", _death(exc.exitcode)))
-                continue
-            except RockbenchError:
-                raise
-            except Exception as exc:  # e.g. an unpicklable result
-                fault(i, TaskFault("error", f"{type(exc).__name__}: {exc}"))
-                continue
-            finish(i, value)
+        while waiting or running:
+            # only as many in flight as workers asked for: the others wait here, so
+            # that a time limit never counts time spent queueing behind other runs
+            while waiting and len(running) < ex.jobs:
+                i = waiting.popleft()
+                running[schedule(i)] = i
+            ready, _ = wait(running, return_when=FIRST_COMPLETED)
+            for fut in ready:
+                i = running.pop(fut)
+                try:
+                    value = fut.result()
+                except FutureTimeout:
+                    fault(i, TaskFault("timeout",
+                                       f"killed after the {limit(i) or 0.0:g} s limit"))
+                    continue
+                except ProcessExpired as exc:
+                    fault(i, TaskFault("died", _death(exc.exitcode)))
+                    continue
+                except RockbenchError:
+                    raise
+                except Exception as exc:  # e.g. an unpicklable result
+                    fault(i, TaskFault("error", f"{type(exc).__name__}: {exc}"))
+                    continue
+                finish(i, value)
     except BaseException:  # bad input, Ctrl-C: kill the children, keep what was reported
-        pool.stop()
-        pool.join()
+        for pool in pools.values():
+            pool.stop()
+        for pool in pools.values():
+            pool.join()
         raise
-    pool.close()
-    pool.join()
+    for pool in pools.values():
+        pool.close()
+        pool.join()
     return results
 
 

@@ -171,6 +171,10 @@ class Engine(ABC):
     #: Conformance checks this engine is known to fail: check name -> measured reason.
     #: The test suites mark them as strict expected failures.
     known_failures: ClassVar[Mapping[str, str]] = {}
+    #: True if the engine keeps global state between runs (one model per process, a
+    #: global session): the runner then starts a fresh worker process for every run
+    #: instead of reusing a warm one (:mod:`rockbench.runner`).
+    fresh_process: ClassVar[bool] = False
 
     # ------------------------------------------------------------------ public API
     @classmethod
@@ -208,7 +212,15 @@ class Engine(ABC):
                     f"{', '.join(sorted(cls.presets))}"
                 )
             base = base.replace(**cls.presets[preset])
-        return base.replace(**overrides) if overrides else base
+        if not overrides:
+            return base
+        try:
+            return base.replace(**overrides)
+        except SettingsError as exc:
+            text = str(exc)
+            if text.split(" ", 1)[0] in overrides:  # a knob's value: name its engine too
+                raise SettingsError(f"{cls.name}.{text}") from None
+            raise
 
     def resolve_settings(self, settings: Any = None) -> EngineSettings:
         """Accept None, a preset name, a mapping of overrides or a Settings instance."""
