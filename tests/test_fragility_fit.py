@@ -26,6 +26,7 @@ from rockbench.fragility import (
 )
 from rockbench.fragility.fit import _centre, _fit_batch
 from rockbench.scenarios import Block, Contact, CosinePulse, Scenario, SinePulse, Sinusoid, Stack
+from rockbench.scenarios.excitation import TiltTable
 
 THETA, BETA = 0.8, 0.35
 LEVELS = np.geomspace(0.3, 2.5, 12)
@@ -332,8 +333,11 @@ def test_intensity_errors():
     pulse = SinePulse(frequency=2.0, amplitude=0.01)
     with pytest.raises(ScenarioError, match="needs the block"):
         intensity(pulse, "pgv-rocking")
-    with pytest.raises(ScenarioError, match="PGV of a 'sinusoid'"):
-        intensity(Sinusoid(frequency=2.0, amplitude=0.01, duration=3.0), "pgv")
+    with pytest.raises(ScenarioError, match="PGV of a 'tilt-table'"):
+        intensity(TiltTable(rate=0.01), "pgv")
+    # a windowed sinusoid (1-cycle ramps) reaches its steady velocity amplitude A ω
+    assert intensity(Sinusoid(frequency=2.0, amplitude=0.01, duration=3.0), "pgv") == \
+        pytest.approx(0.01 * 4.0 * math.pi, rel=1e-5)
     with pytest.raises(ScenarioError, match="sine or cosine pulse"):
         pulse_ratios(Sinusoid(frequency=2.0, amplitude=0.01), B_ROCK)
     assert [(m.value, m.units, m.needs_block) for m in IntensityMeasure] == [

@@ -45,8 +45,6 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
-import numpy as np
-
 from rockbench.errors import ScenarioError
 from rockbench.scenarios.excitation import CosinePulse, Excitation, Record, SinePulse
 from rockbench.scenarios.model import RockingProperties
@@ -117,33 +115,18 @@ def peak_ground_acceleration(excitation: Excitation) -> float:
 
 
 def peak_ground_velocity(excitation: Excitation) -> float:
-    """PGV = max |u̇_g| over the whole motion (m/s), exact.
+    """PGV = max |u̇_g| over the whole motion (m/s): :meth:`Excitation.peak_velocity`.
 
-    For a record the velocity is the exact integral of the piecewise-linear,
-    baseline-corrected acceleration: quadratic between samples, with an
-    extremum inside an interval where the acceleration changes sign, at
-    v_k − a_k² / (2 s_k) (s_k the slope there). For the one-sine and one-cosine
-    pulses it is the closed form 2|A|ω resp. |A|ω (reached in every full cycle).
+    Exact for records (the exact integral of the piecewise-linear,
+    baseline-corrected acceleration, including the extrema between samples)
+    and for the one-sine and one-cosine pulses (2|A|ω resp. |A|ω).
 
     Raises
     ------
     ScenarioError
-        For other excitations (a closed form is not available).
+        For a motion that never ends.
     """
-    if isinstance(excitation, Record):
-        t = excitation.times
-        a = excitation.acceleration(t)
-        v = excitation.velocity(t)
-        da, dt = np.diff(a), np.diff(t)
-        inner = (a[:-1] * a[1:] < 0.0)
-        # a changes sign strictly inside the interval, so da != 0 there
-        v_inner = v[:-1][inner] - a[:-1][inner] ** 2 * dt[inner] / (2.0 * da[inner])
-        return float(max(np.max(np.abs(v)), np.max(np.abs(v_inner), initial=0.0)))
-    if isinstance(excitation, SinePulse):
-        return 2.0 * abs(excitation.amplitude) * excitation.omega
-    if isinstance(excitation, CosinePulse):
-        return abs(excitation.amplitude) * excitation.omega
-    raise ScenarioError(f"the PGV of a {excitation.kind!r} excitation is not available")
+    return float(excitation.peak_velocity())
 
 
 def _velocity_scale(rocking: RockingProperties, g: float) -> float:

@@ -190,6 +190,25 @@ class Excitation(ABC):
         t = np.linspace(0.0, t_end, 20001)
         return float(np.max(np.abs(self.acceleration(t))))
 
+    def peak_velocity(self) -> float:
+        """PGV: the largest |u̇_g| over the whole motion (m/s).
+
+        Records and pulses give it exactly; this default samples the velocity
+        finely over the motion.
+
+        Raises
+        ------
+        ScenarioError
+            For a motion that never ends (no peak over a finite time).
+        """
+        if not math.isfinite(self.end_time):
+            raise ScenarioError(f"the PGV of a {self.kind!r} excitation, which never ends, "
+                                "is not defined")
+        if self.end_time <= 0:
+            return 0.0
+        t = np.linspace(0.0, self.end_time, 20001)
+        return float(np.max(np.abs(self.velocity(t))))
+
     def motion_bounds(self, t_end: float = math.inf) -> tuple[float, float]:
         """Upper bounds on |u_g| and |u̇_g| over [0, t_end] (m, m/s).
 
@@ -352,6 +371,10 @@ class _Pulse(Excitation):
     def _phase(self, t_end: float) -> float:
         """ω · min(t_end, end of the pulse), at least 0: the pulse phase reached by t_end."""
         return self.omega * min(max(t_end, 0.0), self.end_time)
+
+    def peak_velocity(self) -> float:
+        """PGV in closed form: the velocity bound of :meth:`motion_bounds` is exact for a pulse."""
+        return self.motion_bounds()[1]
 
     @property
     def acceleration_amplitude(self) -> float:
@@ -749,6 +772,16 @@ class Record(Excitation):
         tt, a, _, _ = self._tab
         return float(np.max(np.abs(a[tt <= t_end]))) if np.any(tt <= t_end) else 0.0
 
+    def peak_velocity(self) -> float:
+        """PGV, exact: the velocity is quadratic between samples, with an extremum inside an
+        interval where the acceleration changes sign, at v_k − a_k² Δt / (2 Δa)."""
+        t, a, v, _ = self._tab
+        da, dt = np.diff(a), np.diff(t)
+        inner = a[:-1] * a[1:] < 0.0
+        # a changes sign strictly inside the interval, so da != 0 there
+        v_inner = v[:-1][inner] - a[:-1][inner] ** 2 * dt[inner] / (2.0 * da[inner])
+        return float(max(np.max(np.abs(v)), np.max(np.abs(v_inner), initial=0.0)))
+
     def motion_bounds(self, t_end: float = math.inf) -> tuple[float, float]:
         """Bounds from the tabulated samples, valid between them too.
 
@@ -785,8 +818,15 @@ class Record(Excitation):
         """A record from ``file`` (CSV or PEER AT2), or inline ``times`` and ``accelerations``.
 
         ``units`` (``"g"`` or ``"m/s2"``) applies to a file; inline accelerations
-        are in m/s². ``scale`` multiplies the accelerations.
+        are in m/s². ``scale`` multiplies the accelerations. A table with ``set``
+        names a record of an installed record set instead
+        (:class:`~rockbench.scenarios.record_sets.SetRecord`).
         """
+        if isinstance(table, Mapping) and ("set" in table or "record" in table):
+            # imported here: the record sets load optional packages
+            from rockbench.scenarios.record_sets import SetRecord
+
+            return SetRecord.from_table(table, source=source)
         data = cls.read_fields(table)
         scale = data.get("scale", 1.0)
         checks.number(scale, "record scale")

@@ -23,7 +23,7 @@ import tomli_w
 from rockbench.errors import ScenarioError
 from rockbench.scenarios import checks
 from rockbench.scenarios.assembly import Assembly, Prism, Support
-from rockbench.scenarios.excitation import excitation_from_table
+from rockbench.scenarios.excitation import Excitation, excitation_from_table
 from rockbench.scenarios.model import Block, Contact, Scenario, Stack
 from rockbench.tomlfile import read_toml
 
@@ -183,13 +183,32 @@ def scenario_from_dict(data: dict[str, Any], *, source: Path | None = None,
         description=description,
         stack=stack,
         contact=Contact(**contact_raw),
-        excitation=excitation_from_table(data.get("excitation", {"type": "free"}),
-                                         source=source),
+        excitation=_excitation(data.get("excitation", {"type": "free"}), source, stack, g),
         initial_tilt=tilt,
         duration=data.get("duration", 10.0),
         output_rate=data.get("output_rate", 1000.0),
         g=g,
     )
+
+
+def _excitation(table: Any, source: Path | None, stack: Stack | Assembly,
+                g: float) -> Excitation:
+    """The ``[excitation]``; a record of a set scaled to a block-normalised intensity
+    (``pga-uplift``, ``pgv-rocking``) needs the rocking constants of the stack just built:
+    its block's, or a stack's as one body."""
+    if not (isinstance(table, dict) and table.get("type") == "record" and "set" in table
+            and "measure" in table):
+        return excitation_from_table(table, source=source)
+    from rockbench.scenarios.record_sets import SetRecord  # optional packages
+
+    rocking = (None if isinstance(stack, Assembly) else stack.blocks[0].rocking(float(g))
+               if len(stack.blocks) == 1 else stack.monolithic(float(g)))
+    try:
+        return SetRecord.from_table(table, source=source, rocking=rocking, g=float(g))
+    except ScenarioError as exc:
+        msg = str(exc)
+        raise ScenarioError(msg if msg.startswith("[excitation]") else
+                            f"[excitation] {msg}") from None
 
 
 def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:

