@@ -8,7 +8,9 @@ three orders of magnitude slower (``HAVE_NUMBA`` tells which).
 
 Model (one time step, 3DEC's cycle in two dimensions, x–z plane)
 -----------------------------------------------------------------
-Bodies are convex polygons; body ``nbody − 1`` is the kinematic base. For each
+Bodies are convex polygons; body ``nbody − 1`` is the kinematic base, and the
+bodies before it with zero inverse mass (an assembly's fixed supports, after
+the blocks) translate with it. For each
 candidate pair (i, j) of bodies the contact is the pair of edges (a of i, b of
 j) that face each other and are closest to anti-parallel (within 45°) with a
 non-empty overlap: the part of edge b onto which edge a projects, bounded by
@@ -266,18 +268,27 @@ def _steps(n: int, dt: float, pos: np.ndarray, vel: np.ndarray, inv_m: np.ndarra
     """``n`` steps (see :func:`advance`); the base at ``base_u[off + step]`` if driven."""
     base = pos.shape[0] - 1
     driven = base_u.shape[0] > 0
+    # bodies with inv_m = 0 before the base: an assembly's supports, moving with it
+    nfree = 0
+    while nfree < base and inv_m[nfree] > 0.0:
+        nfree += 1
     if not driven:
-        vel[base, 0] = 0.0
+        for b in range(nfree, base + 1):
+            vel[b, 0] = 0.0
     for step in range(n):
         if driven:  # base at u(t_k); its velocity over the last step, as the blocks'
             u = base_u[off + step]
+            for b in range(nfree, base):
+                pos[b, 0] += u - pos[base, 0]
             vel[base, 0] = (u - pos[base, 0]) / dt
             pos[base, 0] = u
+            for b in range(nfree, base):
+                vel[b, 0] = vel[base, 0]
         world_geometry(pos, lverts, lnorm, nverts, wverts, wnorm)
         force[:, :] = 0.0
         _contact_forces(pos, vel, wverts, wnorm, nverts, radius, pairs, pair_depth,
                         pair_edges, shear, kn, ks, pair_mu, pair_beta, dt, force, scratch)
-        for b in range(base):
+        for b in range(nfree):
             vel[b, 0] += force[b, 0] * inv_m[b] * dt
             vel[b, 1] += (force[b, 1] * inv_m[b] - g) * dt
             vel[b, 2] += force[b, 2] * inv_i[b] * dt
