@@ -32,8 +32,8 @@ from rockbench.trajectory import Status
 
 __all__ = ["GROUP_TABLES", "group_table", "group_tables", "Context", "overview_table",
            "peak_tables", "error_table", "free_tables",
-           "timing_table", "paper_experiment_table", "paper_findings", "input_label",
-           "fmt_impact"]
+           "timing_table", "cost_table", "paper_experiment_table", "paper_findings",
+           "input_label", "fmt_impact"]
 
 Row = RunResult
 
@@ -328,6 +328,59 @@ def timing_table(ctx: Context) -> Table:
     return t
 
 
+def _median(values: Sequence[float]) -> float:
+    return float(np.median(values)) if values else math.nan
+
+
+def _kind(scenarios: Sequence[Scenario]) -> str:
+    if any(s.is_assembly for s in scenarios):
+        return "assemblies"
+    return "single blocks" if all(s.n_blocks == 1 for s in scenarios) else "stacks"
+
+
+def cost_table(ctx: Context, group: str, scenarios: Sequence[Scenario]) -> Table:
+    """Per engine and preset: CPU per simulated second next to the accuracy it buys.
+
+    Over the group's scenarios (single blocks, stacks or assemblies): the median
+    CPU seconds per simulated second of the completed runs, their total CPU
+    time, and the median over the ``ok`` runs of max |Δθ|/λ and of |Δpeak|/peak
+    (the largest magnitude over the blocks) against the analytic reference.
+    """
+    number = ctx.next_number()
+    t = Table(
+        key=f"cost-{group}",
+        title=f"Table {number}. Cost and the accuracy it buys, {group_title(group).lower()}",
+        caption=(f"Per engine and preset over the {len(scenarios)} "
+                 f"scenario{'' if len(scenarios) == 1 else 's'} of this group "
+                 f"({_kind(scenarios)}): median CPU seconds per simulated second of the "
+                 "completed runs (CPU time of the run inside its worker, process start-up "
+                 "excluded; < 1 is faster than real time on one core) and their total CPU "
+                 "time, next to the median over the ok runs of the largest deviation "
+                 "max |θ − θ_ref|/λ and of the peak error |Δpeak|/peak (largest over the "
+                 "blocks; – in free rocking, whose peak is the initial tilt) against the "
+                 "analytic reference. Read it before choosing a preset for a study of many "
+                 "runs."),
+        columns=["method", "ok runs", "CPU s / simulated s", "total CPU (s)",
+                 "median max |Δθ|/λ", "median |Δpeak|/peak"])
+    for m in ctx.engines:
+        rows = [r for s in scenarios if (r := ctx.row(s.name, m)) is not None]
+        done = [r.metrics for r in rows if r.metrics.completed]
+        ok = [r.metrics for r in rows if r.status is Status.OK]
+        cost = [c for x in done if (c := x.cpu_per_simulated_second) is not None]
+        errs = [x.max_error for x in ok if x.max_error is not None]
+        # in free rocking the peak is the initial tilt: no measure of accuracy
+        peaks = [abs(r.metrics.peak_error) for r in rows if r.status is Status.OK
+                 and r.metrics.peak_error is not None and not r.scenario.excitation.is_free]
+        t.add_row([
+            Cell(m, kind="head"), f"{len(ok)}/{len(rows)}",
+            fmt_factor(_median(cost)) if cost else Cell("–", kind="crashed"),
+            fmt_seconds(sum(x.cpu_time or 0.0 for x in done)),
+            fmt_error(_median(errs)),
+            fmt_impact(_median(peaks)) if peaks else "–",
+        ])
+    return t
+
+
 def paper_experiment_table(ctx: Context, scenarios: Sequence[Scenario]) -> Table | None:
     """The paper's Table 7 (errors against the experiment) for the scenarios present."""
     pt = paper_tables().get("table7")
@@ -406,3 +459,60 @@ def _errors(ctx: Context, group: str, scenarios: Sequence[Scenario]) -> list[Tab
 def _experiment(ctx: Context, group: str, scenarios: Sequence[Scenario]) -> list[Table]:
     t = paper_experiment_table(ctx, scenarios) if group == "single-sine" else None
     return [t] if t is not None else []
+
+
+def horizon_table(ctx: Context, group: str, scenarios: Sequence[Scenario]) -> Table | None:
+    """Predictability horizon t* per case and each engine's error up to it (None: not measured).
+
+    t* is read from the runs' metrics (``RunMetrics.horizon``, the same for every
+    method of a scenario); past it the case is chaotic and only distributions compare.
+    """
+    def horizon(s: Scenario) -> float | None:
+        rows = [ctx.row(s.name, m) for m in ctx.methods]
+        return next((r.metrics.horizon for r in rows
+                     if r is not None and r.metrics.horizon is not None), None)
+
+    if all(horizon(s) is None for s in scenarios):
+        return None
+    columns = ["scenario", "f (Hz)", "A (mm)", "ü_g/(g tan λ)", "t* (s)", "duration (s)",
+               "beyond t*", *ctx.engines]
+    groups = [("input", 4), ("predictability", 3)]
+    if ctx.engines:
+        groups.append(("max |Δθ|/λ up to t*", len(ctx.engines)))
+    t = Table(
+        key=f"horizon-{group}",
+        title=f"Table {ctx.next_number()}. Predictability horizon, "
+              f"{group_title(group).lower()}",
+        caption=("t*: the first time at which an ensemble of analytic reference runs with "
+                 "tiny perturbations of the input amplitude and the initial tilt (see the "
+                 "predictability section) spreads by more than the stated fraction of λ; the "
+                 "duration when it never does (well posed). Every time-history, impact and "
+                 "peak error of this report is measured up to t*; past it the reference is not "
+                 "predictable and engines are compared by distributions instead."),
+        columns=columns, groups=groups)
+    for s in scenarios:
+        h = horizon(s)
+        cells: list[Cell | str] = _case_columns(s)
+        if h is None:
+            cells += ["–", fmt_seconds(s.duration), Cell("not measured")]
+        else:
+            chaotic = h < s.duration
+            cells += [fmt_seconds(h), fmt_seconds(s.duration),
+                      Cell("chaotic: see the distributions" if chaotic else "well posed",
+                           title=f"spread > λ fraction after {h:.2f} s" if chaotic else "")]
+        for m in ctx.engines:
+            r = ctx.row(s.name, m)
+            cells.append(_error_cell(t, r, fmt_error(r.metrics.max_error) if r else "–", m))
+        t.add_row(cells)
+    return t
+
+
+@group_table
+def _horizon(ctx: Context, group: str, scenarios: Sequence[Scenario]) -> list[Table]:
+    t = horizon_table(ctx, group, scenarios) if group != "free" else None
+    return [t] if t is not None else []
+
+
+@group_table
+def _cost(ctx: Context, group: str, scenarios: Sequence[Scenario]) -> list[Table]:
+    return [cost_table(ctx, group, scenarios)] if ctx.engines else []
