@@ -1,10 +1,13 @@
-"""``python -m benchmarks [--quick] [--only overhead,analytic,scaling,paper] [--out FILE]``.
+"""``python -m benchmarks [--quick] [--only overhead,analytic,scaling,paper,study,rollout,
+pareto] [--out FILE]``.
 
-Runs the speed benchmarks of issue 7 and writes ``benchmarks/RESULTS.md``
+Runs the speed benchmarks of issue 7 (and issue 19's ``study``, ``rollout`` and
+``pareto`` sections: runner overhead, MuJoCo batches, presets against the
+cheapest settings meeting their bounds) and writes ``benchmarks/RESULTS.md``
 (Markdown tables with the machine and versions) and
 ``benchmarks/accuracy_speed.png`` (accuracy against speed). Not part of the
 test run. ``--quick`` shortens every case (about 2 minutes); the full run takes
-4 to 8 minutes on 2 cores.
+4 to 8 minutes on 2 cores for issue 7's sections, 10 to 20 more for issue 19's.
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ from pathlib import Path
 
 from benchmarks import load, machine_info
 
-SECTIONS = ("overhead", "analytic", "scaling", "paper")
+SECTIONS = ("overhead", "analytic", "scaling", "paper", "study", "rollout", "pareto")
 HERE = Path(__file__).resolve().parent
 
 
@@ -68,6 +71,13 @@ def _summary(data: dict) -> list[str]:
             rows.append(f"| paper timing cases (paper: 53–489 s Bullet, 1440–18055 s 3DEC) | "
                         f"slowest engine run {worst['engine']} on {worst['case']}: "
                         f"{worst['cpu']:.1f} s CPU |")
+    st = [r for r in data.get("study", {}).get("rows", []) if r["variant"] == "warm"]
+    if st:
+        best: dict[str, float] = {}
+        for r in st:
+            best[r["case"]] = min(best.get(r["case"], math.inf), r["overhead_cpu"])
+        rows.append("| study overhead ≤ 10 % with warm workers (CPU; wall in the section) | "
+                    + "; ".join(f"{c}: {100 * v:+.0f} %" for c, v in best.items()) + " |")
     return rows + [""]
 
 
@@ -161,6 +171,12 @@ def main(argv: list[str] | None = None) -> int:
             from benchmarks import analytic_speed as mod
         elif sec == "scaling":
             from benchmarks import scaling as mod
+        elif sec == "study":
+            from benchmarks import study_overhead as mod
+        elif sec == "rollout":
+            from benchmarks import mujoco_rollout as mod
+        elif sec == "pareto":
+            from benchmarks import preset_pareto as mod
         else:
             from benchmarks import paper_times as mod
         texts[sec], data[sec] = mod.run(quick=args.quick)
