@@ -30,6 +30,12 @@ computed anywhere else. Definitions (angles normalised by the scenario's λ):
   blocks from rigid no-slip rocking on the block below (:func:`interface_motion`,
   m; None for a single block): tangential (slip along the lower block's top
   face) and normal (gap, or penetration, at the active interface pivot).
+* ``horizon``: the predictability horizon t* the comparison stopped at
+  (:mod:`rockbench.studies.predictability`; None: not measured, the whole run
+  is compared). With a horizon shorter than the run, ``max_error``,
+  ``max_error_early``, the impact errors and the peak errors (peaks of θ up to
+  t*) stop at t*: beyond it the reference itself is not predictable, so peaks
+  and impacts there are not compared one-to-one (``error_note`` says so).
 """
 
 from __future__ import annotations
@@ -196,6 +202,7 @@ class RunMetrics:
     error_note: str = ""
     interface_slip: float | None = None
     interface_gap: float | None = None
+    horizon: float | None = None
 
     @property
     def completed(self) -> bool:
@@ -315,7 +322,8 @@ NUMERIC_METRICS = frozenset({
 
 def evaluate_run(scenario: Scenario, traj: Trajectory, reference: Trajectory | None, *,
                  is_reference: bool = False, settings_hash: str = "", scenario_hash: str = "",
-                 engine_version: str = "", reference_note: str = "") -> RunMetrics:
+                 engine_version: str = "", reference_note: str = "",
+                 horizon: float | None = None) -> RunMetrics:
     """The metrics of one run against the analytic reference (the only metric function).
 
     Parameters
@@ -332,6 +340,9 @@ def evaluate_run(scenario: Scenario, traj: Trajectory, reference: Trajectory | N
         Identity of the run, stored with it.
     reference_note : str
         Why there is no usable reference (kept as ``error_note``).
+    horizon : float, optional
+        Predictability horizon t* (s) of the scenario: errors are measured up
+        to it (see the module docstring); recorded as ``horizon``.
     """
     lam = scenario.critical_angle
     n = traj.t.size
@@ -350,8 +361,10 @@ def evaluate_run(scenario: Scenario, traj: Trajectory, reference: Trajectory | N
         slide=sliding(traj, scenario),
         interface_slip=slip, interface_gap=gap,
         engine_version=engine_version or traj.engine_version, settings_hash=settings_hash,
-        scenario_hash=scenario_hash,
+        scenario_hash=scenario_hash, horizon=finite_or_none(horizon),
     )
+    # a horizon inside the run: the comparison stops there
+    cut = (float(horizon) if horizon is not None and horizon < scenario.duration else None)
     if is_reference:
         return RunMetrics(**base, error_note="reference")
     if reference is None or not reference.t.size or not reference.status.completed:
@@ -368,6 +381,10 @@ def evaluate_run(scenario: Scenario, traj: Trajectory, reference: Trajectory | N
     if reference.status is Status.OVERTURNED:
         past = np.nonzero(np.max(np.abs(reference.theta), axis=1) > lam)[0]
         t_end = float(reference.t[past[0]]) if past.size else None
+    # the reference still rocks at t*: its fall (if any) lies in the unpredictable part
+    rocking_at_cut = cut is not None and (t_end is None or t_end > cut)
+    if cut is not None:
+        t_end = cut if t_end is None else min(t_end, cut)
     try:
         max_error = metrics.max_error(traj, reference, lam, t_end)
     except ValueError as exc:  # sampled at other times
@@ -389,12 +406,15 @@ def evaluate_run(scenario: Scenario, traj: Trajectory, reference: Trajectory | N
         missing = int(np.sum(~np.isfinite(errs)))
     peak_errors: tuple[float | None, ...] = ()
     note = ""
-    if reference.status is Status.OK:
-        p = metrics.peak_ratio(traj, lam)
-        r = metrics.peak_ratio(reference, lam)
+    if reference.status is Status.OK or rocking_at_cut:
+        p = _peaks_until(traj, lam, cut)
+        r = _peaks_until(reference, lam, cut)
         peak_errors = _floats((p - r) / np.maximum(r, PEAK_FLOOR))
     else:
         note = f"reference {reference.status}: {reference.message}"
+    if cut is not None:
+        note = (f"chaotic after t* = {cut:.2f} s: errors up to t*, beyond it see the "
+                f"distributions" + (f"; {note}" if note else ""))
     defined = [abs(e) for e in peak_errors if e is not None]
     imp_defined = [e for e in imp_errors if e is not None]
     return RunMetrics(
@@ -405,6 +425,16 @@ def evaluate_run(scenario: Scenario, traj: Trajectory, reference: Trajectory | N
         impact_time_error=max(imp_defined) if imp_defined else None,
         impacts_missing=missing, error_note=note,
     )
+
+
+def _peaks_until(traj: Trajectory, lam: float, t_end: float | None) -> np.ndarray:
+    """max |θ_i|/λ per block over the samples up to ``t_end`` (all of them if None)."""
+    if t_end is None:
+        return metrics.peak_ratio(traj, lam)
+    n = int(np.searchsorted(traj.t, t_end, side="right"))
+    if n == 0:
+        return np.full(traj.n_blocks, np.nan)
+    return np.max(np.abs(traj.theta[:n]), axis=0) / lam
 
 
 @dataclass(frozen=True)

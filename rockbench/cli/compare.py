@@ -68,6 +68,15 @@ def configure_compare(p: argparse.ArgumentParser) -> None:
     add_store_arguments(p)
     p.add_argument("--sensitivity", action="store_true",
                    help=f"also run the sensitivity study on B0 (the {SUITE} pseudo-suite)")
+    p.add_argument("--ensemble", type=int, default=0, metavar="N",
+                   help="beyond each case's predictability horizon t*, compare distributions: "
+                        "run N perturbed copies of every scenario (input amplitude and initial "
+                        "tilt changed by 1e-9..1e-6) on every method and compare the peaks' "
+                        "distributions and the overturning probability with the reference's "
+                        "(costs N runs per scenario and method; default 0: off)")
+    p.add_argument("--horizon-members", type=int, default=None, metavar="M",
+                   help="perturbed analytic runs per scenario that measure t* (default "
+                        "8; 0: no horizon, errors over the whole run)")
     p.add_argument("--link-figures", action="store_true",
                    help="link the PNGs in figures/ from index.html instead of embedding them")
     p.add_argument("--no-isolate", action="store_true",
@@ -92,6 +101,10 @@ def _command_line(args: argparse.Namespace) -> str:
         parts += ["--jobs", str(args.jobs)]
     if args.timeout:
         parts += ["--timeout", f"{args.timeout:g}"]
+    if args.ensemble:
+        parts += ["--ensemble", str(args.ensemble)]
+    if args.horizon_members is not None:
+        parts += ["--horizon-members", str(args.horizon_members)]
     if args.no_db:
         parts.append("--no-db")
     elif args.db != DEFAULT_DB:
@@ -149,6 +162,10 @@ def execute_compare(args: argparse.Namespace) -> int:
         for p in presets:
             cls.settings(p, **ov)  # unknown preset or bad knob: one line, exit 2
         overrides[e] = ov
+    if args.ensemble < 0 or args.ensemble == 1:
+        raise RockbenchError(f"--ensemble must be 0 (off) or >= 2, got {args.ensemble}")
+    if args.horizon_members is not None and args.horizon_members < 0:
+        raise RockbenchError(f"--horizon-members must be >= 0, got {args.horizon_members}")
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise RockbenchError(f"--out {args.out!r} exists and is not a directory")
@@ -162,7 +179,9 @@ def execute_compare(args: argparse.Namespace) -> int:
         execution=execution,
         resume=args.resume, db=None if args.no_db else Path(args.db),
         sensitivity=sensitivity,
-        suite=label, command=_command_line(args), embed_figures=not args.link_figures)
+        suite=label, command=_command_line(args), embed_figures=not args.link_figures,
+        ensemble=args.ensemble,
+        **({} if args.horizon_members is None else {"horizon_members": args.horizon_members}))
 
     def progress(total: int, description: str) -> Progress:
         return Progress(total, description, quiet=args.quiet)

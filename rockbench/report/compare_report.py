@@ -35,6 +35,7 @@ from rockbench.report.document import (
     python_version,
     render_document_markdown,
 )
+from rockbench.report.ensemble_report import predictability_section, write_ensemble_files
 from rockbench.report.figures import (
     SpeedPoint,
     accuracy_speed_figure,
@@ -82,6 +83,7 @@ def write_report(result: CompareResult, start: float | None = None) -> list[Path
         The files written (figures excluded).
     """
     files = [write_results_csv(result)]
+    files += write_ensemble_files(result)
     files += _write_document(result, start)
     return files
 
@@ -208,6 +210,9 @@ def _write_document(result: CompareResult, start: float | None) -> list[Path]:
                 + "; a cross marks where a run stopped (overturned, unstable, crashed)."),
                 f"Time history, {s.name}"))
         sections.append(sec)
+    psec = predictability_section(result, fig, ctx.next_number) if opts.scenarios else None
+    if psec is not None:
+        sections.append(psec)
     if opts.scenarios:
         tsec = Section("timing", "Cost: wall time and real-time factor")
         tsec.paragraphs.append(

@@ -34,6 +34,13 @@ from rockbench.runner import ExecutionOptions, Job, run_jobs
 from rockbench.scenarios import Scenario, scenario_to_dict
 from rockbench.store import Store
 from rockbench.studies import sensitivity as sens
+from rockbench.studies.ensembles import EnsembleComparison, compare_ensembles, run_ensembles
+from rockbench.studies.predictability import (
+    DEFAULT_MEMBERS,
+    Perturbation,
+    Predictability,
+    predictability,
+)
 from rockbench.studies.recording import measure, record_run, settings_hash
 from rockbench.studies.references import NO_MODEL, references
 from rockbench.trajectory import Status, Trajectory
@@ -85,6 +92,14 @@ class CompareOptions:
         The command line shown in the report header.
     embed_figures : bool
         Embed PNGs in index.html as base64 (else link ``figures/``).
+    horizon_members : int
+        Perturbed reference runs per scenario that measure its predictability
+        horizon t* (errors are measured up to t*); 0: none, the whole run is compared.
+    ensemble : int
+        Perturbed members per scenario and method whose peak distributions are
+        compared beyond t* (``--ensemble``); 0: off.
+    perturbation : Perturbation
+        The perturbations of both ensembles.
     """
 
     scenarios: list[Scenario]
@@ -100,6 +115,9 @@ class CompareOptions:
     suite: str = ""
     command: str = ""
     embed_figures: bool = True
+    horizon_members: int = DEFAULT_MEMBERS
+    ensemble: int = 0
+    perturbation: Perturbation = field(default_factory=Perturbation)
 
 
 @dataclass(frozen=True)
@@ -158,6 +176,10 @@ class CompareResult:
         Runs executed now and runs taken from the store.
     wall_time : float
         Wall time of the study in s.
+    predictability : dict
+        Scenario name → its horizon t* (scenarios with an analytic model).
+    ensembles : list of EnsembleComparison
+        Each engine's peak distributions against the reference's (``ensemble`` > 0).
     """
 
     options: CompareOptions
@@ -172,6 +194,8 @@ class CompareResult:
     ran: int
     reused: int
     wall_time: float
+    predictability: dict[str, Predictability] = field(default_factory=dict)
+    ensembles: list[EnsembleComparison] = field(default_factory=list)
 
 
 def _plan(opts: CompareOptions) -> tuple[list[PlannedRun], list[Method], Scenario | None,
@@ -257,10 +281,14 @@ def run_comparison(opts: CompareOptions,
                 trajs[(run.scenario.name, run.method.label)] = traj
         reused = len(runs) - len(todo)
 
+        horizons: dict[str, Predictability] = {}
+
         def finished(run: PlannedRun, traj: Trajectory, *, record: bool) -> None:
             ref = trajs.get((run.scenario.name, REFERENCE))
+            pred = horizons.get(run.scenario.name)
             m = measure(run.scenario, run.method, traj, ref,
-                        engine_version=versions[run.method.engine])
+                        engine_version=versions[run.method.engine],
+                        horizon=pred.t_star if pred is not None else None)
             res = RunResult(run.scenario, run.method, m, run.trajectory)
             results[res.key] = res
             if record:
@@ -276,7 +304,14 @@ def run_comparison(opts: CompareOptions,
                 engine=REFERENCE, scenario=run.scenario.name)
             _save(out, run, traj)
             trajs[(run.scenario.name, REFERENCE)] = traj
-            finished(run, traj, record=True)
+        if opts.horizon_members:
+            cases = list({r.scenario.name: r.scenario for r in runs}.values())
+            horizons.update(predictability(
+                cases, members=opts.horizon_members, perturbation=opts.perturbation,
+                store=store, execution=opts.execution,
+                nominal={s.name: trajs.get((s.name, REFERENCE)) for s in cases}))
+        for run in ref_runs:
+            finished(run, trajs[(run.scenario.name, REFERENCE)], record=True)
         jobs = [r.job for r in engine_runs]
         by_job = {id(job): run for job, run in zip(jobs, engine_runs, strict=True)}
         cm = progress(len(jobs), "compare") if progress else contextlib.nullcontext(None)
@@ -295,12 +330,27 @@ def run_comparison(opts: CompareOptions,
             key = (run.scenario.name, run.method.label)
             if key not in results and key in trajs:
                 finished(run, trajs[key], record=False)
+        ensembles: list[EnsembleComparison] = []
+        if opts.ensemble:
+            n_jobs = opts.ensemble * len(opts.scenarios) * (len(methods) - 1)
+            cm = progress(n_jobs, "ensembles") if progress else contextlib.nullcontext(None)
+            with cm as bar:
+                def on_member(job: Job, traj: Trajectory) -> None:
+                    if bar is not None:
+                        bar.advance(f"{job.scenario.name} {job.label} {traj.status}")
+
+                dists = run_ensembles(opts.scenarios, methods, opts.ensemble,
+                                      opts.perturbation, store=store,
+                                      execution=opts.execution, timeout_of=_limit(opts),
+                                      on_result=on_member)
+            ensembles = compare_ensembles(dists)
     ordered = [results[(r.scenario.name, r.method.label)] for r in runs
                if (r.scenario.name, r.method.label) in results]
     return CompareResult(options=opts, runs=runs, results=ordered, trajectories=trajs,
                          methods=methods, variations=variations, skipped=skipped, b0=b0,
                          versions=versions, ran=len(todo), reused=reused,
-                         wall_time=time.perf_counter() - start)
+                         wall_time=time.perf_counter() - start, predictability=horizons,
+                         ensembles=ensembles)
 
 
 def _limit(opts: CompareOptions) -> Callable[[Job], float]:

@@ -12,6 +12,14 @@ scenario through the one dispatcher, records each run as it finishes
   metric grew beyond ``base·(1 + rel) + abs`` or the run no longer ends as it did;
 * **skip** when the engine cannot model the scenario (status ``unsupported``).
 
+Time-history errors are measured up to each scenario's predictability horizon
+t* (:mod:`rockbench.studies.predictability`), as in the comparison report: a
+cell's ``max_error`` is its largest deviation up to t*, and a divergence
+after t* (where the reference itself is not predictable) fails no cell. t* is
+measured only for the scenarios where a cell checks a metric that stops at it
+(:data:`HORIZON_METRICS`, as a tolerance or a baseline regression): a matrix
+that checks statuses only costs no ensemble.
+
 Rendering lives in :mod:`rockbench.report.grid` (the grid) and
 :mod:`rockbench.report.junit` (JUnit XML); the exit status is
 :attr:`MatrixResult.exit_code` (0 all pass, 1 any fail or regression).
@@ -33,6 +41,7 @@ from rockbench.runner import ExecutionOptions, Job, run_jobs
 from rockbench.scenarios import Scenario
 from rockbench.store import Store
 from rockbench.studies.baseline import Baseline, BaselineCell
+from rockbench.studies.predictability import DEFAULT_MEMBERS, predictability
 from rockbench.studies.recording import finish_run
 from rockbench.studies.references import references
 from rockbench.studies.tolerances import DEFAULT_REGRESSION, Tolerances
@@ -42,6 +51,9 @@ __all__ = ["Cell", "MatrixResult", "run_matrix", "evaluate", "regressions", "fmt
            "KIND", "PASS", "FAIL", "REGRESSION", "SKIP"]
 
 PASS, FAIL, REGRESSION, SKIP = "pass", "fail", "regression", "skip"
+#: Metrics measured up to the predictability horizon t*.
+HORIZON_METRICS = frozenset({"max_error", "max_error_early", "impact_time_error",
+                             "impacts_missing", "peak_error"})
 #: The store's ``kind`` of runs made by this study.
 KIND = "matrix"
 
@@ -233,6 +245,7 @@ def run_matrix(
     resume: bool = False,
     execution: ExecutionOptions | None = None,
     on_cell: Callable[[Cell], None] | None = None,
+    horizon_members: int = DEFAULT_MEMBERS,
 ) -> MatrixResult:
     """Run the engines × scenarios matrix and judge every cell.
 
@@ -259,6 +272,9 @@ def run_matrix(
         Workers, time limit, executor.
     on_cell : callable, optional
         Called with each finished (or reused) cell.
+    horizon_members : int
+        Perturbed reference runs per scenario that measure its horizon t*
+        (0: errors over the whole run).
     """
     start = time.perf_counter()
     settings = settings or {}
@@ -270,6 +286,14 @@ def run_matrix(
     if dup is not None:
         raise RockbenchError(f"scenario name {dup!r} appears twice in the matrix")
     refs, notes = references(scenarios, store, execution=execution)
+    checked = set(HORIZON_METRICS & set(tolerances.regression.get("metrics", ()))
+                  if baseline is not None else ())
+    timed = [sc for sc in scenarios
+             if checked or any(tolerances.for_cell(e, sc.name, suite).get(m) is not None
+                               for e in engines for m in HORIZON_METRICS)]
+    horizons = (predictability(timed, members=horizon_members, store=store,
+                               execution=execution, nominal=refs)
+                if horizon_members and timed else {})
     versions = {e: engine_class(e).version() for e in engines}
     methods = {e: Method.of(e, settings.get(e, {})) for e in engines}
     by_name = {sc.name: sc for sc in scenarios}
@@ -296,7 +320,8 @@ def run_matrix(
         method = methods[job.engine]
         m = finish_run(store, sc, method, traj, refs.get(sc.name), kind=KIND, suite=suite,
                        engine_version=versions[job.engine],
-                       reference_note=notes.get(sc.name, ""))
+                       reference_note=notes.get(sc.name, ""),
+                       horizon=horizons[sc.name].t_star if sc.name in horizons else None)
         add(Cell(sc.name, method, m))
 
     run_jobs(jobs, execution, on_result=finished)

@@ -27,7 +27,7 @@ def settings_hash(method: Method) -> str:
 
 def measure(scenario: Scenario, method: Method, traj: Trajectory,
             reference: Trajectory | None, *, engine_version: str = "",
-            reference_note: str = "") -> RunMetrics:
+            reference_note: str = "", horizon: float | None = None) -> RunMetrics:
     """:func:`~rockbench.evaluation.evaluate_run` with the run's identity filled in.
 
     Parameters
@@ -40,11 +40,14 @@ def measure(scenario: Scenario, method: Method, traj: Trajectory,
         Version to record (default: the trajectory's, else the engine's).
     reference_note : str
         Why there is no reference (kept as the metrics' ``error_note``).
+    horizon : float, optional
+        The scenario's predictability horizon t*: errors stop there.
     """
     version = engine_version or traj.engine_version or engine_class(method.engine).version()
     return evaluate_run(scenario, traj, reference, is_reference=method.is_reference,
                         settings_hash=settings_hash(method), scenario_hash=scenario_hash(scenario),
-                        engine_version=version, reference_note=reference_note)
+                        engine_version=version, reference_note=reference_note,
+                        horizon=horizon)
 
 
 def record_run(store: Store | None, scenario: Scenario, method: Method, traj: Trajectory,
@@ -60,10 +63,10 @@ def record_run(store: Store | None, scenario: Scenario, method: Method, traj: Tr
 def finish_run(store: Store | None, scenario: Scenario, method: Method, traj: Trajectory,
                reference: Trajectory | None, *, kind: str, suite: str = "",
                trajectory: str = "", engine_version: str = "",
-               reference_note: str = "") -> RunMetrics:
+               reference_note: str = "", horizon: float | None = None) -> RunMetrics:
     """:func:`measure` then :func:`record_run`: the body of every study's ``finished``."""
     metrics = measure(scenario, method, traj, reference, engine_version=engine_version,
-                      reference_note=reference_note)
+                      reference_note=reference_note, horizon=horizon)
     record_run(store, scenario, method, traj, metrics, kind=kind, suite=suite,
                trajectory=trajectory)
     return metrics

@@ -61,11 +61,12 @@ __all__ = ["Tolerances", "ToleranceError", "METRICS", "STATUS_RULES", "load_tole
 #: meaning; each is a :data:`rockbench.evaluation.NUMERIC_METRICS` name, read with
 #: :meth:`rockbench.evaluation.RunMetrics.value`.
 METRICS: dict[str, str] = {
-    "max_error": "max |Δθ|/λ against the analytic reference over the run",
-    "max_error_early": "max |Δθ|/λ up to the reference's third impact",
-    "impact_time_error": "largest relative error of the first three impact times",
+    "max_error": "max |Δθ|/λ against the analytic reference up to the predictability "
+                 "horizon t* (the whole run when it is well posed)",
+    "max_error_early": "max |Δθ|/λ up to the reference's third impact (and t*)",
+    "impact_time_error": "largest relative error of the first three impact times before t*",
     "impacts_missing": "number of the reference's first impacts the run lacks",
-    "peak_error": "largest |relative error| of max |θ|/λ over the blocks",
+    "peak_error": "largest |relative error| of max |θ|/λ over the blocks (peaks up to t*)",
     "time_to_rest": "time after which every |θ| stays below 0.01 λ (s)",
     "wall_time": "wall-clock time of the run in s",
     "cpu_time": "CPU time of the run in s",
