@@ -38,10 +38,13 @@ from typing import Any
 import numpy as np
 
 from rockbench.analytic.limit_analysis import LimitResult, limit_analysis
+from rockbench.method import Method
 from rockbench.runner import ExecutionOptions, Job, run_jobs
 from rockbench.scenarios import Scenario
 from rockbench.scenarios.assembly import limit_assembly
 from rockbench.scenarios.excitation import TiltTable
+from rockbench.store import Store
+from rockbench.studies.recording import finish_run
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = ["ONSET_ROTATION", "ONSET_DISPLACEMENT", "MOVED_FRACTION", "SETTLE", "TiltOutcome",
@@ -260,7 +263,7 @@ def _jobs(scenarios: Sequence[Scenario], engine: str, settings: Mapping[str, Any
 def tilting_table(scenarios: Sequence[Scenario], engine: str, *, rate: float = 0.05,
                   direction: int = 1, settings: Mapping[str, Any] | None = None,
                   execution: ExecutionOptions | None = None,
-                  overshoot: float = 1.3) -> list[TiltComparison]:
+                  overshoot: float = 1.3, store: Store | None = None) -> list[TiltComparison]:
     """Tilt each scenario at ``rate`` and ``rate / 2`` in ``engine``; compare with the LP.
 
     Parameters
@@ -279,6 +282,9 @@ def tilting_table(scenarios: Sequence[Scenario], engine: str, *, rate: float = 0
         How the runs are executed (default: one isolated worker).
     overshoot : float
         Each run lasts until α = overshoot · α_LP + 0.02.
+    store : Store, optional
+        Where each run is recorded as it finishes (kind ``tilting``; no
+        analytic trajectory reference).
 
     Returns
     -------
@@ -296,7 +302,13 @@ def tilting_table(scenarios: Sequence[Scenario], engine: str, *, rate: float = 0
             raise ValueError(f"{sc.name}: limit analysis finds no collapse ({lim.status})")
     s = dict(settings or {})
     jobs = _jobs(scenarios, engine, s, rate, direction, limits, overshoot)
-    trajs = run_jobs(jobs, execution)
+
+    def finished(job: Job, traj: Trajectory) -> None:
+        finish_run(store, job.scenario, Method.of(job.engine, job.settings), traj, None,
+                   kind="tilting", reference_note="tilting table: limit analysis is the "
+                                                  "reference of the onset, not of a trajectory")
+
+    trajs = run_jobs(jobs, execution, on_result=finished if store is not None else None)
     outcomes = [tilt_outcome(t, j.scenario, lim.load_factor)
                 for t, j, lim in zip(trajs, jobs, [x for x in limits for _ in (0, 1)],
                                      strict=True)]
