@@ -55,8 +55,9 @@ def _num(v: float, fmt: str = "{:.3g}") -> str:
     return fmt.format(v) if v is not None and math.isfinite(v) else "–"
 
 
-def _interval(iv: tuple[float, float]) -> str:
-    return f"[{_num(iv[0])}, {_num(iv[1])}]" if all(math.isfinite(v) for v in iv) else "–"
+def _interval(iv: tuple[float, float], fmt: str = "{:.3g}") -> str:
+    return (f"[{_num(iv[0], fmt)}, {_num(iv[1], fmt)}]" if all(math.isfinite(v) for v in iv)
+            else "–")
 
 
 def _fit_text(fit: FragilityFit) -> str:
@@ -153,7 +154,7 @@ def _fit_table(result: FragilityResult, state: LimitState, number: int) -> Table
             if meth.is_reference:
                 cells += [Cell("1", kind), Cell("–", kind)]
             elif cmp is not None and math.isfinite(cmp.ratio):
-                cells += [_num(cmp.ratio), _interval(cmp.ratio_interval)]
+                cells += [_num(cmp.ratio, "{:.3f}"), _interval(cmp.ratio_interval, "{:.3f}")]
             else:
                 cells += ["–", "–"]
         else:

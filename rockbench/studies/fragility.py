@@ -41,6 +41,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -251,7 +252,7 @@ class FragilityOptions:
     output_rate: float = 200.0
     execution: ExecutionOptions = field(default_factory=ExecutionOptions)
     resume: bool = False
-    db: Any = None
+    db: Path | None = None
     set_name: str = ""
     n_resamples: int = 1000
     confidence: float = 0.95
