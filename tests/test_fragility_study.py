@@ -266,3 +266,20 @@ def test_fragility_command_on_a_real_record(tmp_path, capsys):
     md = (out / "report.md").read_text()
     assert "PEER NGA-West2 RSN6" in md
     assert len((out / "runs.csv").read_text().strip().splitlines()) == 1 + 3
+
+
+def test_a_stack_is_scaled_by_the_uplift_of_the_stack_as_one_body():
+    lower, upper = Block(0.3, 0.3, 0.9, density=2000.0), Block(0.3, 0.3, 0.6, density=2000.0)
+    sc = Scenario("stack", Stack((lower, upper)), Contact())
+    rec = noise_records(1)[0]
+    res = study(sc, (rec,), (0.0, 0.8, 2.5), settle=1.0)
+    mono = sc.stack.monolithic(sc.g)
+    pga = float(np.max(np.abs(rec.record.acceleration(rec.record.times))))
+    for r in res.runs:
+        # the level is PGA/(g tan λ) of the whole stack rocking on the bottom corners
+        assert r.scale * pga / (sc.g * math.tan(mono.lam)) == pytest.approx(r.level, rel=1e-9)
+        assert r.metrics.n_blocks == 2 and r.metrics.status.completed
+    low = [r for r in res.runs if r.level < 1.0]
+    # below the stack's uplift threshold nothing lifts (the stack's λ is the smallest here)
+    assert mono.lam < min(lower.rocking(sc.g).lam, upper.rocking(sc.g).lam)
+    assert all(r.metrics.peaks == (0.0, 0.0) for r in low)
