@@ -295,7 +295,10 @@ def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = Tr
                  f"each the record plus {opts.settle:g} s, sampled at {opts.output_rate:g}/s"),
         ("Wall time", f"{result.wall_time:.1f} s on {opts.execution.jobs} worker(s); overhead "
                       "(wall × workers)/(Σ CPU of the runs) − 1 = "
-                      + (f"{100 * overhead:.0f} %" if math.isfinite(overhead) else "–")),
+                      + (f"{100 * overhead:.0f} %" if math.isfinite(overhead) else "–")
+                      + "; over the runs' own wall time "
+                      + (f"{100 * result.overhead_on_run_wall:.0f} %"
+                         if math.isfinite(result.overhead_on_run_wall) else "–")),
         ("rockbench", rockbench.__version__),
         ("Python", python_version()),
         ("Machine (CPU)", cpu_model()),

@@ -437,6 +437,16 @@ class FragilityResult:
             return math.nan
         return self.wall_time * self.options.execution.jobs / cpu - 1.0
 
+    @property
+    def overhead_on_run_wall(self) -> float:
+        """(wall time × workers) / (sum of the runs' own wall time) − 1, over the runs made now:
+        what the study adds around its runs when a loaded machine slows them alike (NaN when
+        nothing ran now)."""
+        wall = sum(r.metrics.wall_time for r in self.runs if not r.reused)
+        if not self.ran or wall <= 0:
+            return math.nan
+        return self.wall_time * self.options.execution.jobs / wall - 1.0
+
 
 @dataclass(frozen=True)
 class _Planned:
