@@ -162,20 +162,30 @@ def test_identical_method_ensembles_are_at_distance_zero():
     assert all(d is not None and d.value == 0.0 for d in comp.distances)
 
 
-def test_compare_measures_errors_up_to_t_star_and_reports_it(tmp_path):
+def test_compare_measures_errors_up_to_t_star_and_reports_distributions(tmp_path):
     sc = _short(CHAOTIC, 3.0)
-    opts = CompareOptions(scenarios=[sc], engines=[], out=tmp_path, horizon_members=3,
-                          execution=HERE)
-    result = run_comparison(opts)
+    register("fault", fault_engine.FaultEngine)  # follows the reference closely
+    try:
+        opts = CompareOptions(scenarios=[sc], engines=["fault"], out=tmp_path,
+                              overrides={"fault": {"follow": True}}, horizon_members=3,
+                              ensemble=2, execution=HERE)
+        result = run_comparison(opts)
+        files = write_report(result)
+    finally:
+        unregister("fault")
     p = result.predictability[sc.name]
     assert not p.well_posed
-    (ref_row,) = result.results
-    assert ref_row.metrics.horizon == p.t_star
-    files = write_report(result)
+    assert [r.metrics.horizon for r in result.results] == [p.t_star, p.t_star]
+    (comp,) = result.ensembles
+    assert comp.engine.members == comp.reference.members == 2
     md = (tmp_path / "report.md").read_text()
-    assert f"chaotic after t* = {p.t_star:.2f} s" in md
+    assert f"chaotic after t* = {p.t_star:.2f} s" in md and "Distributions beyond t*" in md
     data = json.loads((tmp_path / "predictability.json").read_text())
-    assert data[sc.name]["t_star"] == p.t_star and tmp_path / "predictability.json" in files
+    assert data[sc.name]["t_star"] == p.t_star
+    assert {tmp_path / "ensembles.csv", tmp_path / "ensembles.json"} <= set(files)
+    rows = (tmp_path / "ensembles.csv").read_text().splitlines()
+    assert len(rows) == 1 + sc.n_blocks
+    assert (tmp_path / "figures" / f"ensemble-{sc.name}.png").stat().st_size > 0
 
 
 def test_matrix_cells_are_measured_up_to_t_star():

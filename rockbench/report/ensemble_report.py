@@ -110,7 +110,7 @@ def _distribution_table(ensembles: Sequence[EnsembleComparison], number: int) ->
 
 def distribution_figure(path: Path, scenario: str,
                         dists: Sequence[PeakDistribution]) -> Path:
-    """Peak |θ|/λ of every member, per block (columns) and method (rows of dots + box)."""
+    """Peak |θ|/λ of every member, per block (columns) and method (dots, quartiles)."""
     nb = max(len(d.peaks) for d in dists)
     fig = Figure(figsize=(4.2 * nb, 0.55 * len(dists) + 1.6))
     axes = [fig.add_subplot(1, nb, i + 1) for i in range(nb)]
@@ -120,15 +120,15 @@ def distribution_figure(path: Path, scenario: str,
             x = np.asarray(d.peaks[i] if i < len(d.peaks) else (), float)
             y = len(dists) - 1 - k
             if x.size:
-                ax.boxplot(x, positions=[y], vert=False, widths=0.5, showfliers=False)
+                q1, med, q3 = np.quantile(x, [0.25, 0.5, 0.75])
+                # quartile bar and median tick by hand (boxplot's orientation API moved)
+                ax.plot([q1, q3], [y, y], "-", lw=6, color="0.8", solid_capstyle="butt")
+                ax.plot([med, med], [y - 0.25, y + 0.25], "-", lw=2, color="black")
                 ax.plot(x, y + rng.uniform(-0.15, 0.15, x.size), "o", ms=3, alpha=0.6,
                         color="black" if k == 0 else f"C{k % 10}")
-            p = d.p_overturn
-            if p:
-                ax.annotate(f"P(overturn) {p:.2f}", (1.0, y), xycoords=("axes fraction", "data"),
-                            ha="right", va="bottom", fontsize=7)
         ax.set_yticks(range(len(dists)))
-        ax.set_yticklabels([d.method for d in reversed(dists)])
+        ax.set_yticklabels([d.method + (f"\nP(overturn) {d.p_overturn:.2f}"
+                                        if d.p_overturn else "") for d in reversed(dists)])
         which = ("bottom block" if i == 0 else "top block") if nb == 2 else f"block {i + 1}"
         ax.set_xlabel(f"peak |θ|/λ, {which}")
         ax.grid(True, axis="x", alpha=0.3)
@@ -164,9 +164,10 @@ def predictability_section(result: CompareResult, fig: Callable[..., FigureItem]
         for name, dists in by_case.items():
             p = distribution_figure(out / "figures" / f"ensemble-{slug(name)}.png", name, dists)
             sec.items.append(fig(p, (
-                "Peak |θ|/λ of each perturbed member (dots) and their quartiles (box) per "
-                "method, analytic reference on top in black; members that overturned are "
-                "counted in P(overturn), not drawn."), f"Distributions, {name}"))
+                "Peak |θ|/λ of each perturbed member (dots), their interquartile range (grey "
+                "bar) and median (black tick) per method, analytic reference on top in "
+                "black; members that overturned are counted in P(overturn), not drawn."),
+                f"Distributions, {name}"))
     return sec
 
 

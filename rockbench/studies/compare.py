@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import rockbench
+from rockbench import analytic
 from rockbench.engines import engine_class
 from rockbench.errors import RockbenchError
 from rockbench.evaluation import RunResult
@@ -332,7 +333,8 @@ def run_comparison(opts: CompareOptions,
                 finished(run, trajs[key], record=False)
         ensembles: list[EnsembleComparison] = []
         if opts.ensemble:
-            n_jobs = opts.ensemble * len(opts.scenarios) * (len(methods) - 1)
+            n_jobs = opts.ensemble * (len(methods) - 1) * sum(
+                analytic.has_reference(s) for s in opts.scenarios)
             cm = progress(n_jobs, "ensembles") if progress else contextlib.nullcontext(None)
             with cm as bar:
                 def on_member(job: Job, traj: Trajectory) -> None:
