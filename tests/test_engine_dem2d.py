@@ -364,3 +364,18 @@ def test_tilting_table_of_assemblies_matches_limit_analysis() -> None:
         assert c.mechanism_matches, what
         signs = tuple(c.limit.mechanism[i].rotation_sign for i in c.half.moved)
         assert c.half.rotation_sign == signs, what
+
+
+def test_running_bond_wall_stands_still() -> None:
+    """A wall's brick above a head joint is never in contact with the face of the brick
+    beside the one it rests on (a whole brick away): the wall stays at rest.
+
+    Before the depth bound of the edge selection, the 2 × 2 panel blew up in 4 ms.
+    """
+    from rockbench.scenarios.assembly import running_bond_wall
+
+    sc = Scenario("wall", running_bond_wall(3, 3), duration=0.5, output_rate=200.0)
+    tr = Dem2dEngine().simulate(sc, "fast")
+    assert tr.status is Status.OK, tr.message
+    assert float(np.max(np.abs(tr.theta - tr.theta[0]))) < 1e-3 * sc.critical_angle
+    assert float(np.max(np.abs(tr.x - tr.x[0]))) < 1e-5

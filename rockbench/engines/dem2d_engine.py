@@ -88,15 +88,20 @@ the same face-pair contact with corner sub-contacts between every block and
 every other body (:func:`contact_pairs`). The stiffness from ``compliance``
 and the impact β of each pair come from its interface at rest
 (:func:`assembly_contacts`; a pair not in contact at rest takes the upper
-block alone on its own face). Single blocks and stacks are built exactly as
-before (bit-identical trajectories). Measured on the tilting table (rates
-0.05 and 0.025 /s, ``fast``): onsets +0.8 % (b/h = 0.5 block), +2.8 %
-(parapet, 0.125), +1.7 % (5-drum column, 0.24), +1.0 % (9-voussoir arch
-t/R = 0.2, 0.298) over the limit-analysis factor at the slower rate, the
-rate^(2/3)-extrapolated onsets within 0.1 %, with the LP's blocks and
-rotation signs; 0.2–0.7 s CPU per pair of runs, 18 s for the arch (its
-short voussoir faces carry the whole arch: Δt = 3.2 µs). A dry-stack wall of
-small bricks needs Δt ≈ 0.7 µs at ``fast``.
+block alone on its own face). A block of a wall or an arch rests on several
+faces at once, so the stable step is bounded per block on all its contacts
+together (:func:`_assembly_step`; the pulses of the collapse study stay stable
+at 4 × that step on the column, the parapet, the wall and the arch). Single
+blocks and stacks are built exactly as before (bit-identical trajectories).
+Measured on the tilting table (rates 0.05 and 0.025 /s, ``fast``): onsets
++0.8 % (b/h = 0.5 block), +2.8 % (parapet, 0.125), +1.7 % (5-drum column,
+0.24), +1.0 % (9-voussoir arch t/R = 0.2, 0.298) over the limit-analysis
+factor at the slower rate, the rate^(2/3)-extrapolated onsets within 0.1 %,
+with the LP's blocks and rotation signs. Steps at ``fast``: 9 µs (5-drum
+column), 11 µs (parapet), 1.7 µs (arch t/R = 0.2: its short voussoir faces
+carry the whole arch), 0.5 µs (the 6 × 3 wall of 0.24 × 0.12 m bricks, about
+8 s CPU per simulated second: too costly for the tilting table's tens of
+seconds).
 
 Calibration (benchmarks/calibrate_dem2d.py; ``accurate`` / ``fast``)
 --------------------------------------------------------------------
@@ -322,11 +327,12 @@ def assembly_contacts(scenario: Scenario,
 
     The interfaces are the limit analysis's (face-to-face contacts at rest;
     bodies numbered as in :func:`contact_pairs`). The carried body is the
-    upper one (for a face within 45° of vertical, the first block); it carries
-    itself and every block whose centroid is higher, taken as one body with
-    its own radius of gyration; b is half the interface's length, h the
-    distance of the carried centroid from the interface's line. A load
-    estimate that errs on the heavy side: it only stiffens the contact.
+    upper one; it carries itself and every block whose centroid is higher,
+    taken as one body with its own radius of gyration (a load estimate that
+    errs on the heavy side: it only stiffens the contact); a face within 45°
+    of vertical (a head joint) carries no weight: the lighter block alone.
+    b is half the interface's length, h the distance of the carried centroid
+    from the interface's line.
     """
     asm = scenario.stack
     nb = len(asm.blocks)
@@ -335,11 +341,15 @@ def assembly_contacts(scenario: Scenario,
     out: dict[tuple[int, int], CornerContact] = {}
     for f in asm.to_limit().interfaces:
         candidates = [k for k in (f.a, f.b) if k < nb]
-        if f.b >= nb or abs(f.normal[1]) < math.sqrt(0.5):
-            up = candidates[0]
-        else:  # the normal points from a into b
-            up = f.b if f.normal[1] > 0 else f.a
-        carried = masses[cents[:, 1] > cents[up, 1]].sum() + masses[up]
+        if abs(f.normal[1]) < math.sqrt(0.5):  # a head joint carries no weight
+            up = min(candidates, key=lambda k: masses[k])
+            carried = masses[up]
+        else:
+            if f.b >= nb:
+                up = f.a
+            else:  # the normal points from a into b
+                up = f.b if f.normal[1] > 0 else f.a
+            carried = masses[cents[:, 1] > cents[up, 1]].sum() + masses[up]
         blk = asm.blocks[up]
         depth = min(asm.blocks[k].depth for k in candidates)
         out[(f.a, f.b)] = CornerContact(
@@ -470,6 +480,49 @@ def impact_zeta_for(scenario: Scenario, s: Dem2dSettings, eta: float) -> float:
     return 0.5 * (lo + hi)
 
 
+def _assembly_step(scenario: Scenario, s: Dem2dSettings, kn: float, ks: float,
+                   beta: np.ndarray) -> float:
+    """The stable step of an assembly: the smallest over its blocks of the damped
+    central-difference limit of each block on all its contacts at rest together.
+
+    A block in a wall or an arch rests on several faces at once: its springs
+    add up (K_b = Σ k L d over its interfaces, at least its own face's k w d)
+    and so do its dashpots (C_b = Σ β k L d), with ζ_b = C_b / (2 sqrt(K_b m_b)),
+    m_b = 1 / (1/m + R²/I) (R: its farthest vertex) halved for the relative
+    motion of two equal blocks; Δt = safety · min_b sqrt(m_b / K_b)
+    (sqrt(1 + ζ_b²) − ζ_b).
+    """
+    blocks = scenario.blocks
+    nb = len(blocks)
+    k = max(kn, ks)
+    stiff = np.zeros(nb)
+    damp = np.zeros(nb)
+    beta_max = np.zeros(nb)
+    interfaces = assembly_contacts(scenario, s.subcontacts)
+    for p, (i, j) in enumerate(contact_pairs(scenario)):
+        for b in (i, j):
+            if b < nb:
+                beta_max[b] = max(beta_max[b], beta[p])
+        c = interfaces.get((min(i, j), max(i, j)))
+        if c is None:
+            continue
+        face = k * 2.0 * c.half_width * c.area / (c.half_width / (s.subcontacts - 1))
+        for b in (i, j):
+            if b < nb:
+                stiff[b] += face
+                damp[b] += beta[p] * face
+    dt = math.inf
+    for b, blk in enumerate(blocks):
+        own = k * blk.width * blk.depth
+        kb = max(stiff[b], own)
+        cb = max(damp[b], beta_max[b] * own)
+        r2 = float(np.max(np.sum(np.asarray(blk.profile()) ** 2, axis=1)))
+        mb = 0.5 / (1.0 / blk.m + r2 / float(blk.inertia[1]))
+        zeta = 0.5 * cb / math.sqrt(kb * mb)
+        dt = min(dt, math.sqrt(mb / kb) * (math.sqrt(1 + zeta * zeta) - zeta))
+    return s.safety * dt
+
+
 class Dem2dEngine(Engine):
     """Planar Distinct Element Method: rigid blocks on penalty sub-contacts (3DEC-style)."""
 
@@ -537,13 +590,10 @@ class Dem2dEngine(Engine):
         beta = pair_damping(scenario, s, kn)
         if s.timestep is not None:
             return float(s.timestep), kn, ks, beta
+        if scenario.is_assembly:
+            return _assembly_step(scenario, s, kn, ks, beta), kn, ks, beta
         k_max = max(kn, ks) * max(b.width * b.depth for b in blocks)
-        if scenario.is_assembly:  # R: the farthest vertex of any polygon
-            m_eff = min(1.0 / (1.0 / b.m + float(np.max(np.sum(b.profile() ** 2, axis=1)))
-                               / b.inertia[1]) for b in blocks)
-        else:
-            m_eff = min(1.0 / (1.0 / b.m + (b.b ** 2 + b.h ** 2) / b.inertia[1])
-                        for b in blocks)
+        m_eff = min(1.0 / (1.0 / b.m + (b.b ** 2 + b.h ** 2) / b.inertia[1]) for b in blocks)
         omega_max = math.sqrt(k_max / m_eff)
         zeta = 0.5 * float(np.max(beta)) * omega_max
         dt = s.safety * math.sqrt(m_eff / k_max) * (math.sqrt(1 + zeta * zeta) - zeta)

@@ -15,8 +15,10 @@ candidate pair (i, j) of bodies the contact is the pair of edges (a of i, b of
 j) that face each other and are closest to anti-parallel (within 45°) with a
 non-empty overlap: the part of edge b onto which edge a projects, bounded by
 the vertices of either edge (so the overlap ends are the vertices that act as
-rocking pivots). ``nsub`` sub-contacts are spread over the overlap, ends
-included, with trapezoidal tributary lengths times the contact depth (the
+rocking pivots), penetrating by less than a tenth of the shorter edge (so that
+a face of a side neighbour a whole block away is never taken for a contact).
+``nsub`` sub-contacts are spread over the overlap, ends included, with trapezoidal
+tributary lengths times the contact depth (the
 smaller out-of-plane depth of the two bodies) as areas. At each sub-contact
 the gap g along b's outward normal n (negative: overlap) gives
 
@@ -62,6 +64,9 @@ __all__ = ["HAVE_NUMBA", "advance", "sample", "world_geometry", "write_poses"]
 
 #: Edges closer than this to anti-parallel may form a contact (cos 45°).
 _COS_MAX = math.cos(math.radians(45.0)) - 1e-9
+#: Deepest penetration of a contact, as a fraction of the shorter of its two edges
+#: (penalty contacts penetrate by ~1e-5 of a block's size).
+_MAX_DEPTH = 0.1
 
 
 @njit(cache=True)
@@ -155,6 +160,11 @@ def _select_edges(i: int, j: int, pos: np.ndarray, wverts: np.ndarray, wnorm: np
             g_hi = ((a0x - b0x - s_hi * tx) * nax + (a0z - b0z - s_hi * tz) * naz) * inv
             gmin = min(g_lo, g_hi)
             if gmin >= 0.0:
+                continue
+            # a face of a side neighbour lies "behind" this one by a whole block (a wall's
+            # brick above the head joint of two below): no contact goes that deep
+            la = math.sqrt((a1x - a0x) ** 2 + (a1z - a0z) ** 2)
+            if gmin < -_MAX_DEPTH * min(la, lb):
                 continue
             if d < best_dot - 1e-12 or gmin < best_gap:
                 best = a * kmax + b
