@@ -124,7 +124,9 @@ w − 2c, the chamfered prism's flat faces) collided box–box gives the 4 corne
 20 % → 0.85 % (with a 0.1 mm breaking threshold; 3.7 % at 1 mm). Drake point contact, 4
 slices: 7 point pairs across the interface, **every one at x = +0.07 m** (the +x edge,
 depth 2.1e-5 m), none on the −x edge: the upper block rests on one edge and does not lift
-as the reference does (5 Hz / 4 mm pulse: top peak −69 %). DART (narrow box): box–box.
+as the reference does (5 Hz / 4 mm pulse: top peak −69 %). Splitting each slice into x
+halves (the +x half turned by π about z) does not move them: the halves' points sit at
+x = 0 and x = +0.07 m. DART (narrow box): box–box.
 
 **Verdicts.** pymunk converges (pulses ≤ 0.5 %, sines ≤ 1.7 % from 0.02 ms on; 0.01 ms:
 0.15 % / 1.2 %): `accurate` is 0.02 ms. DART converges below 0.05 ms (0.025 ms: 0.18 % /
