@@ -75,6 +75,7 @@ import rockbench
 from rockbench.analytic.twoblock_model import BlockParams
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import Excitation, Scenario
+from rockbench.scenarios.model import Stack
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = [
@@ -414,7 +415,8 @@ def interface_slips(scenario: Scenario) -> bool:
     base acceleration that exceeds μᵢ g at some time.
     """
     c = scenario.contact
-    if scenario.n_blocks != 2 or c.interface_friction is None:
+    if (scenario.n_blocks != 2 or c.interface_friction is None
+            or not isinstance(scenario.stack, Stack)):
         return False
     if scenario.initial_tilt != 0.0 or any(scenario.stack.offsets):
         return False
@@ -462,6 +464,8 @@ def slides(scenario: Scenario) -> bool:
     the cases its bounds do not cover rather than leave them to a rocking model
     that assumes no slip).
     """
+    if not isinstance(scenario.stack, Stack):  # an assembly: no sliding reference
+        return False
     if interface_slips(scenario):
         return True
     if scenario.initial_tilt != 0.0 or any(scenario.stack.offsets):
