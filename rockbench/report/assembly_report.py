@@ -30,6 +30,7 @@ from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import FancyArrow, Polygon, Rectangle
+from matplotlib.ticker import NullFormatter
 
 import rockbench
 from rockbench.analytic.limit_analysis import LimitResult
@@ -97,7 +98,8 @@ def block_polygons(scenario: Scenario) -> list[np.ndarray]:
 def _governing(scenario: Scenario) -> LimitResult | None:
     """The limit analysis of the direction with the smaller collapse factor."""
     found = [r for r in (reference(scenario, d) for d in (1, -1)) if r.status == "collapse"]
-    return min(found, key=lambda r: r.load_factor) if found else None
+    # equal factors (a symmetric assembly) within the LP tolerance: loads toward +x
+    return min(found, key=lambda r: (round(r.load_factor, 9), -r.direction)) if found else None
 
 
 def draw_assembly(ax: Axes, scenario: Scenario, limit: LimitResult | None) -> AssemblyDrawing:
@@ -132,9 +134,10 @@ def draw_assembly(ax: Axes, scenario: Scenario, limit: LimitResult | None) -> As
             scale = 0.25 * size / vmax if vmax > 0 else 0.0
             tip = cents[i] + v * scale
             pts = np.vstack([pts, tip])
+            head = min(0.04 * size, 0.5 * float(np.hypot(*v)) * scale)  # short arrows too
             ax.add_patch(FancyArrow(cents[i, 0], cents[i, 1], v[0] * scale, v[1] * scale,
-                                    width=0.008 * size, head_width=0.04 * size,
-                                    head_length=0.04 * size, length_includes_head=True,
+                                    width=0.008 * size, head_width=head,
+                                    head_length=head, length_includes_head=True,
                                     color="#b22222"))
             if m.centre is not None:
                 ax.plot([m.centre[0]], [m.centre[1]], marker="x", color="#1f3b73",
@@ -209,6 +212,8 @@ def collapse_figure(path: Path, study: CollapseStudy, scenario: Scenario) -> Pat
         ax.axhline(alpha, color="black", linestyle="--", linewidth=1,
                    label=f"static factor α = {alpha:.4f}")
     ax.set_xscale("log")
+    ax.set_xticks(list(study.frequencies), [f"{f:g}" for f in study.frequencies])
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("pulse frequency f_p (Hz)")
     ax.set_ylabel("collapse a_p / g")
     ax.set_ylim(bottom=0)
