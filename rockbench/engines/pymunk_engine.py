@@ -134,7 +134,6 @@ class PymunkEngine(Engine):
         "fast": {"timestep": 1e-3, "iterations": 20},
         # the former accurate: single blocks as accurate, stacks 2.4 % / 8.3 % off (see above)
         "single": {"timestep": 1e-4},
-        "fine": {"timestep": 5e-5, "iterations": 50},
     }
     requires: ClassVar[tuple[str, ...]] = ("pymunk",)
     extra: ClassVar[str] = "pymunk"
