@@ -13,6 +13,7 @@ test run. ``--quick`` shortens every case (about 2 minutes); the full run takes
 from __future__ import annotations
 
 import argparse
+import importlib
 import datetime as _dt
 import math
 import sys
@@ -21,7 +22,12 @@ from pathlib import Path
 
 from benchmarks import load, machine_info
 
-SECTIONS = ("overhead", "analytic", "scaling", "paper", "study", "rollout", "pareto")
+#: Section name → module of this package with ``run(quick) -> (markdown, data)``.
+MODULES = {"overhead": "overhead", "analytic": "analytic_speed", "scaling": "scaling",
+           "paper": "paper_times", "study": "study_overhead", "rollout": "mujoco_rollout",
+           "pareto": "preset_pareto", "stack": "stack_convergence",
+           "fragility": "fragility_cost"}
+SECTIONS = tuple(MODULES)
 HERE = Path(__file__).resolve().parent
 
 
@@ -165,20 +171,7 @@ def main(argv: list[str] | None = None) -> int:
             continue
         t0 = time.perf_counter()
         print(f"[benchmarks] {sec} ...", file=sys.stderr, flush=True)
-        if sec == "overhead":
-            from benchmarks import overhead as mod
-        elif sec == "analytic":
-            from benchmarks import analytic_speed as mod
-        elif sec == "scaling":
-            from benchmarks import scaling as mod
-        elif sec == "study":
-            from benchmarks import study_overhead as mod
-        elif sec == "rollout":
-            from benchmarks import mujoco_rollout as mod
-        elif sec == "pareto":
-            from benchmarks import preset_pareto as mod
-        else:
-            from benchmarks import paper_times as mod
+        mod = importlib.import_module(f"benchmarks.{MODULES[sec]}")
         texts[sec], data[sec] = mod.run(quick=args.quick)
         print(f"[benchmarks] {sec} done in {time.perf_counter() - t0:.0f} s", file=sys.stderr,
               flush=True)

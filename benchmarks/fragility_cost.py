@@ -48,9 +48,11 @@ def _cpu() -> float:
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
-def run(set_name: str = "fema-p695-far-field", n_levels: int = 15, jobs: int = 2,
-        n_records: int | None = None) -> str:
-    """Run the benchmark and return its Markdown section."""
+def run(quick: bool = False, *, set_name: str = "fema-p695-far-field", n_levels: int = 15,
+        jobs: int = 2, n_records: int | None = None) -> tuple[str, dict]:
+    """Run the benchmark; its Markdown section and numbers (``quick``: 6 records, 5 levels)."""
+    if quick:
+        n_levels, n_records = 5, n_records or 6
     t0 = time.perf_counter()
     records = set_records(set_name)[:n_records]
     t_load = time.perf_counter() - t0
@@ -98,7 +100,8 @@ def run(set_name: str = "fema-p695-far-field", n_levels: int = 15, jobs: int = 2
         f"({load()} at the end.)",
         "",
     ]
-    return "\n".join(lines)
+    return "\n".join(lines), {"runs": len(runs), "run_cpu": run_cpu, "overhead_wall": over_wall,
+                              "overhead_cpu": over_cpu}
 
 
 def main() -> None:
@@ -108,7 +111,7 @@ def main() -> None:
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--quick", action="store_true", help="the first 6 records only")
     a = p.parse_args()
-    print(run(a.set, a.levels, a.jobs, 6 if a.quick else None))
+    print(run(a.quick, set_name=a.set, n_levels=a.levels, jobs=a.jobs)[0])
 
 
 if __name__ == "__main__":
