@@ -13,8 +13,8 @@ test run. ``--quick`` shortens every case (about 2 minutes); the full run takes
 from __future__ import annotations
 
 import argparse
-import importlib
 import datetime as _dt
+import importlib
 import math
 import sys
 import time
