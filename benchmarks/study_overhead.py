@@ -14,9 +14,12 @@ interleaved (fresh, warm, fresh, warm, ...), ``--jobs 2``:
 
 * the paper comparison, ``compare --suite paper --engine mujoco,bullet,dart,pymunk
   --presets accurate,fast``, as :func:`rockbench.studies.compare.run_comparison`
-  (the runs, their metrics and trajectory files; not the report rendering),
-  on every ``STRIDE``-th scenario of each paper group (the whole suite takes
-  five minutes per variant on an idle machine);
+  (the engine runs, the analytic references and the predictability ensembles
+  of 8 perturbed analytic runs per scenario that a comparison also runs, their
+  metrics and trajectory files; not the report rendering), on every second
+  scenario of each paper group (the whole suite takes five minutes per
+  variant on an idle machine); the runs' CPU time is summed over every run the
+  study dispatches;
 * 1000 analytic runs: the two-block stack under the 4 Hz pulse for 2 s at
   1000 pulse amplitudes (40 ms of CPU each), one :func:`~rockbench.runner.run_jobs`.
 """
@@ -25,17 +28,22 @@ from __future__ import annotations
 
 import dataclasses
 import resource
+import sys
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+import rockbench.runner as runner
 from benchmarks import engine_status, load
 from rockbench.runner import ExecutionOptions, Job, run_jobs
 from rockbench.scenarios import Scenario, get_scenario, get_suite
 from rockbench.studies.compare import CompareOptions, run_comparison
+from rockbench.trajectory import Trajectory
 
 __all__ = ["run", "paper_scenarios", "analytic_jobs", "Measured", "GOAL"]
 
@@ -89,13 +97,33 @@ def paper_scenarios(stride: int) -> list[Scenario]:
     return [get_scenario(n) for g in GROUPS for n in get_suite(g)[::stride]]
 
 
+@contextmanager
+def _every_run() -> Iterator[list[float]]:
+    """The CPU times of every run dispatched meanwhile (engine runs, references and the
+    predictability ensembles a comparison runs too), as they pass the dispatcher."""
+    cpus: list[float] = []
+    plain = runner.map_tasks
+
+    def counting(*args: Any, **kw: Any) -> list[Any]:
+        out = plain(*args, **kw)
+        cpus.extend(v.cpu_time for v in out if isinstance(v, Trajectory))
+        return out
+
+    runner.map_tasks = counting  # run_jobs looks the dispatcher up at each call
+    try:
+        yield cpus
+    finally:
+        runner.map_tasks = plain
+
+
 def _paper_study(scenarios: list[Scenario], engines: list[str]) -> Callable[
         [ExecutionOptions], list[float]]:
     def study(ex: ExecutionOptions) -> list[float]:
-        with tempfile.TemporaryDirectory(prefix="rockbench-bench-") as tmp:
-            res = run_comparison(CompareOptions(scenarios=scenarios, engines=engines,
-                                                out=Path(tmp), presets=PRESETS, execution=ex))
-        return [t.cpu_time for t in res.trajectories.values()]
+        with tempfile.TemporaryDirectory(prefix="rockbench-bench-") as tmp, \
+                _every_run() as cpus:
+            run_comparison(CompareOptions(scenarios=scenarios, engines=engines,
+                                          out=Path(tmp), presets=PRESETS, execution=ex))
+        return cpus
     return study
 
 
@@ -128,8 +156,8 @@ def _rows(case: str, ms: list[Measured]) -> list[str]:
     return out
 
 
-def run(quick: bool = False) -> tuple[str, dict]:
-    """Markdown section and raw numbers."""
+def run(quick: bool = False, only: str = "") -> tuple[str, dict]:
+    """Markdown section and raw numbers (``only``: "paper" or "analytic", else both)."""
     stride, n_analytic, rounds = (4, 200, 1) if quick else (2, 1000, 1)
     engines = [e for e in ENGINES if engine_status(e)[0]]
     scenarios = paper_scenarios(stride)
@@ -138,6 +166,8 @@ def run(quick: bool = False) -> tuple[str, dict]:
         f"{', '.join(engines)} × {', '.join(PRESETS)})": _paper_study(scenarios, engines),
         f"{n_analytic} analytic runs (stack pulse, 2 s)": _analytic_study(n_analytic),
     }
+    if only:
+        studies = {k: v for k, v in studies.items() if k.startswith(only)}
     load0 = load()
     measured: dict[str, list[Measured]] = {case: [] for case in studies}
     for _ in range(rounds):
@@ -166,3 +196,7 @@ def run(quick: bool = False) -> tuple[str, dict]:
                           overhead_cpu=m.overhead_cpu)
                      for case, ms in measured.items() for m in ms]}
     return "\n".join(lines), data
+
+
+if __name__ == "__main__":
+    print(run(only=sys.argv[1] if len(sys.argv) > 1 else "")[0])
