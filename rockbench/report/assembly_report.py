@@ -49,6 +49,7 @@ from rockbench.studies.collapse import (
     FREE_TIME,
     RESIDUAL_DISPLACEMENT,
     RESIDUAL_ROTATION,
+    CollapsePoint,
     CollapseStudy,
 )
 from rockbench.studies.tilting import TiltComparison, reference
@@ -205,9 +206,12 @@ def collapse_figure(path: Path, study: CollapseStudy, scenario: Scenario) -> Pat
         ax.errorbar(f[ok], a[ok], yerr=[a[ok] - lo[ok], np.zeros(ok.sum())],
                     marker="os^vD"[k % 5], markersize=11 - 2 * (k % 4), markerfacecolor="none",
                     markeredgewidth=1.5, capsize=3, label=e)
-        if (~ok).any():
-            ax.plot(f[~ok], np.full((~ok).sum(), study_max(study) * alpha), linestyle="none",
-                    marker="^", color=f"C{k}", label=f"{e}: none up to")
+        if (~ok).any():  # no collapse: a triangle at the largest pulse tried
+            tried = [max(q.factor for q in p.probes) * p.static_factor
+                     for p, good in zip(pts, ok, strict=True) if not good]
+            ax.plot(f[~ok], tried, linestyle="none", marker="^", color=f"C{k}",
+                    markersize=11 - 2 * (k % 4), markerfacecolor="none",
+                    label=f"{e}: no collapse up to △")
     if math.isfinite(alpha):
         ax.axhline(alpha, color="black", linestyle="--", linewidth=1,
                    label=f"static factor α = {alpha:.4f}")
@@ -220,11 +224,6 @@ def collapse_figure(path: Path, study: CollapseStudy, scenario: Scenario) -> Pat
     ax.set_title(f"one-sine pulse to collapse: {scenario.name}", fontsize=10)
     ax.legend(fontsize=8)
     return _save(fig, path)
-
-
-def study_max(study: CollapseStudy) -> float:
-    """The largest factor any probe of the study tried (a_p / (α g))."""
-    return max((q.factor for p in study.points for q in p.probes), default=1.0)
 
 
 def _pct(x: float) -> str:
@@ -262,9 +261,18 @@ def _collapse_table(study: CollapseStudy) -> Table:
                        Cell(f"{p.static_factor:.4f}", "ref"), Cell(text),
                        Cell(f"{p.factor:.3f}" if math.isfinite(p.upper) else "–"),
                        Cell(f"{p.lower:.3f} … {p.upper:.3f}"),
-                       Cell(f"{len(p.probes)}" + (f" ({p.failed} failed)" if p.failed else "")),
+                       _runs_cell(p),
                        Cell(f"{p.cpu_time:.2f}")])
     return t
+
+
+def _runs_cell(p: CollapsePoint) -> Cell:
+    """The number of runs; a run that failed stopped the bisection: its status, marked."""
+    bad = [q for q in p.probes if q.collapsed is None]
+    if not bad:
+        return Cell(str(len(p.probes)))
+    return Cell(f"{len(p.probes)} (stopped: {bad[0].status} at {bad[0].factor:.3f} α)",
+                str(bad[0].status), title="the bracket is not closed: the run failed")
 
 
 def _cost_table(cmps: Sequence[TiltComparison], study: CollapseStudy | None) -> Table:
