@@ -23,6 +23,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.ticker import NullFormatter
 
 from rockbench.evaluation import RunResult
 from rockbench.method import REFERENCE, Method
@@ -382,6 +383,7 @@ def accuracy_speed_figure(path: Path, points: Sequence[SpeedPoint],
                 ax.annotate(f"{p.method}: no successful run{note}", (x, yhi),
                             textcoords="offset points", xytext=(7, -12), fontsize=8.5)
         ax.set_xscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels overlap on short ranges
         ax.set_yscale("log")
         ax.set_ylim(ylo, yhi * 1.05)
         xs = [v[0] for v in xy if math.isfinite(v[0]) and v[0] > 0]
@@ -502,6 +504,7 @@ def variations_speed_figure(path: Path, points: Sequence[SpeedPoint],
             ax.plot(x, yhi, marker="x", color=c, ms=10, mew=2.2, ls="none", zorder=4,
                     clip_on=False)
     ax.set_xscale("log")
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_yscale("log")
     ax.set_ylim(ylo, yhi * 1.1)
     ax.grid(True, which="major", color="0.9", lw=0.6)
