@@ -25,9 +25,10 @@ from rockbench.studies.ensembles import (
     compare_ensembles,
     run_ensembles,
 )
-from rockbench.studies.matrix import Cell, evaluate, run_matrix
+from rockbench.studies.matrix import Cell, evaluate, horizon_limits, run_matrix
 from rockbench.studies.predictability import (
     Perturbation,
+    Predictability,
     ensemble_scenarios,
     predictability,
     spread_curve,
@@ -206,3 +207,17 @@ def test_matrix_cells_are_measured_up_to_t_star():
     assert cell.metrics.error_note.startswith(f"chaotic after t* = {p.t_star:.2f} s")
     # nothing checked stops at t*: no ensemble is run, the whole run is compared
     assert next(iter(status_only.cells.values())).metrics.horizon is None
+
+
+def test_a_status_that_perturbations_change_is_not_held_to_the_reference():
+    sc, ref, run = _synthetic()
+    fell = Trajectory(t=ref.t[:500], theta=ref.theta[:500], status=Status.OVERTURNED)
+    m = evaluate_run(sc, run, fell, horizon=0.3)
+    cell = Cell(sc.name, Method("pymunk"), m)  # ok, where the nominal reference overturned
+    limits = {"status": "reference", "max_error": 0.01}
+    split = Predictability(sc.name, 0.3, 1.0, 3, Perturbation(), duration=sc.duration,
+                           diverged_outcome=True)
+    same = dataclasses.replace(split, diverged_outcome=False)
+    assert evaluate(cell, horizon_limits(limits, split)) == []
+    assert evaluate(cell, horizon_limits(limits, same))[0].startswith("status ok")
+    assert horizon_limits({"status": ("ok",)}, split) == {"status": ("ok",)}  # explicit rule
