@@ -19,6 +19,7 @@ from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Block, Scenario, SinePulse, save_scenario
 from rockbench.store import Store, StoreError, jsonable, scenario_hash, settings_key
 from rockbench.studies.matrix import run_matrix
+from rockbench.studies.predictability import DEFAULT_MEMBERS
 from rockbench.studies.recording import finish_run
 from rockbench.studies.tolerances import Tolerances
 from rockbench.trajectory import Status, Trajectory
@@ -236,7 +237,8 @@ def test_resume_and_history_through_the_cli(tmp_path: Path,
     assert "(stored)" in out.err and "PASS" in out.out
     with sqlite3.connect(db) as con:
         assert con.execute("SELECT COUNT(*) FROM runs").fetchone()[0] == 2
-        assert con.execute("SELECT COUNT(*) FROM refs").fetchone()[0] == 2
+        # each scenario's reference and its predictability ensemble, cached once
+        assert con.execute("SELECT COUNT(*) FROM refs").fetchone()[0] == 2 * (1 + DEFAULT_MEMBERS)
     assert main(["history", "--db", db]) == 0
     assert "tiny-0" in capsys.readouterr().out
     assert main(["history", "tiny-1", "--db", db, "--metric", "max_error"]) == 0
