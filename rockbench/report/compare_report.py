@@ -335,10 +335,15 @@ def _files_section(rows: Sequence[RunResult]) -> Section:
         f"results.csv holds {len(rows)} rows (one per scenario × method, plus sensitivity "
         "variations marked in the 'variation' column). Columns: status and message (the "
         "reason of a non-ok status); peak_ratio_i = max |θ_i|/λ of block i (1 = bottom); "
-        "max_error = max |θ − θ_ref|/λ; peak_error_i = signed relative peak error against the "
-        "reference; impact_error_k = relative error of the k-th impact time; time_to_rest "
-        "(|θ| < 0.01 λ from then on); error_note = why an error is missing; wall_time (s), "
-        "time_per_simulated_second, realtime_factor; settings_hash, scenario_hash and "
-        "engine_version identify a run for --resume; trajectory = the .npz time history "
-        "(+ .json sidecar with settings and status) under trajectories/.")
+        "max_error = max |θ − θ_ref|/λ (max_error_early: up to the reference's third "
+        "impact); peak_error_i = signed relative peak error against the reference, over "
+        "max(reference peak, 0.02 λ); impact_error_k = relative error of the k-th impact time "
+        "(zero crossings after |θ| reached 0.01 λ, interpolated, the same for every method); "
+        "horizon = the predictability horizon t* the errors stop at; time_to_rest "
+        "(|θ| < 0.01 λ from then on); error_note = why an error is missing; wall_time and "
+        "cpu_time (s), time_per_simulated_second, realtime_factor (simulated s per wall s); "
+        "slide and max_wobble (bottom block sliding, m; out-of-plane rotation, rad); "
+        "settings_hash, scenario_hash and engine_version identify a run (the store's "
+        "--resume); trajectory = the .npz time history (+ .json sidecar with settings and "
+        "status) under trajectories/.")
     return sec
