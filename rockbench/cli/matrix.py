@@ -57,6 +57,10 @@ def configure_matrix(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resume", action="store_true",
                    help="reuse runs already in the store (same scenario content, engine "
                         "version, settings and rockbench version)")
+    p.add_argument("--horizon-members", type=int, default=None, metavar="M",
+                   help="perturbed analytic runs per scenario that measure the predictability "
+                        "horizon t* the checked errors stop at (default 8; 0: errors over "
+                        "the whole run)")
     add_run_arguments(p, timeout=600.0)
     p.epilog = "exit status: 0 all cells pass, 1 a cell failed or regressed, 2 bad input"
 
@@ -68,6 +72,10 @@ def execute_matrix(args: argparse.Namespace) -> int:
     from rockbench.studies.tolerances import load_tolerances
 
     execution = execution_options(args)
+    if args.horizon_members is not None and args.horizon_members < 0:
+        raise RockbenchError(f"--horizon-members must be >= 0, got {args.horizon_members}")
+    horizon = ({} if args.horizon_members is None
+               else {"horizon_members": args.horizon_members})
     for flag, path in (("--junit", args.junit), ("--write-baseline", args.write_baseline)):
         if path:  # before the matrix runs, not after
             check_output_path(path, flag)
@@ -93,7 +101,8 @@ def execute_matrix(args: argparse.Namespace) -> int:
 
             result = run_matrix(scenarios, engines, tolerances, settings=settings,
                                 suite=args.suite, store=store, baseline=baseline,
-                                resume=args.resume, execution=execution, on_cell=on_cell)
+                                resume=args.resume, execution=execution, on_cell=on_cell,
+                                **horizon)
     finally:
         if store is not None:
             store.close()
