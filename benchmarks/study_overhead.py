@@ -167,7 +167,7 @@ def run(quick: bool = False, only: str = "") -> tuple[str, dict]:
         f"{n_analytic} analytic runs (stack pulse, 2 s)": _analytic_study(n_analytic),
     }
     if only:
-        studies = {k: v for k, v in studies.items() if k.startswith(only)}
+        studies = {k: v for k, v in studies.items() if only in k}
     load0 = load()
     measured: dict[str, list[Measured]] = {case: [] for case in studies}
     for _ in range(rounds):
