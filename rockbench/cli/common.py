@@ -21,6 +21,7 @@ from rockbench.errors import RockbenchError
 __all__ = ["selected_engines", "add_engine_arguments", "memory_budget",
            "add_settings_arguments", "engine_settings", "Progress",
            "add_run_arguments", "add_store_arguments", "add_parallel_arguments",
+           "add_worker_arguments",
            "check_parallel_arguments", "execution_options", "open_store", "check_output_path"]
 
 
@@ -158,6 +159,17 @@ def add_parallel_arguments(p: argparse.ArgumentParser, *, timeout: float | None 
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="Dask scheduler address, e.g. tcp://10.0.0.1:8786 (with --executor "
                         "dask; default: a local Dask cluster)")
+    add_worker_arguments(p)
+
+
+def add_worker_arguments(p: argparse.ArgumentParser) -> None:
+    """``--no-warm`` and ``--worker-memory``: how isolated engine workers are kept."""
+    p.add_argument("--no-warm", action="store_true",
+                   help="a fresh process for every run instead of warm workers that import "
+                        "an engine once (a crash or hang still costs only its run either way)")
+    p.add_argument("--worker-memory", type=float, default=None, metavar="GB",
+                   help="address-space limit of each engine worker (default: the run budget "
+                        "+ 6 GB); a run past it ends as that run's failure")
 
 
 def check_parallel_arguments(args: argparse.Namespace) -> None:
@@ -186,11 +198,13 @@ def execution_options(args: argparse.Namespace, *, isolate: bool = True) -> Any:
 
     check_parallel_arguments(args)
     timeout = getattr(args, "timeout", None)
+    memory = getattr(args, "worker_memory", None)
+    extra = {} if memory is None else {"worker_memory": memory}
     return ExecutionOptions(jobs=getattr(args, "jobs", 1),
                             timeout=DEFAULT_TIMEOUT if timeout is None else timeout,
                             executor=getattr(args, "executor", "process"),
                             scheduler=getattr(args, "scheduler", None) or None,
-                            isolate=isolate)
+                            isolate=isolate, warm=not getattr(args, "no_warm", False), **extra)
 
 
 def open_store(args: argparse.Namespace) -> Any:

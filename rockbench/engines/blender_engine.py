@@ -227,6 +227,8 @@ class BlenderEngine(Engine):
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
                                                          chamfer=True)
     Settings: ClassVar[type[EngineSettings]] = BlenderSettings
+    #: bpy is one global Blender session per process: a fresh worker for every run
+    fresh_process: ClassVar[bool] = True
     requires: ClassVar[tuple[str, ...]] = ("bpy",)
     extra: ClassVar[str] = "blender"
     presets: ClassVar[dict[str, dict[str, Any]]] = {
