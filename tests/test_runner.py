@@ -210,7 +210,10 @@ def test_dask_local_cluster_runs_the_same_isolated_jobs() -> None:
 
 
 _PARENT = """
-import sys
+import signal, sys
+# a study dies of these signals by default; the harness (nohup, CI) may have them ignored
+for sig in (signal.SIGHUP, signal.SIGTERM):
+    signal.signal(sig, signal.SIG_DFL)
 sys.path.insert(0, {tests!r})
 import fault_engine
 from rockbench.engines import register
