@@ -143,7 +143,8 @@ def _show(result: Any) -> None:
 # ---------------------------------------------------------------------- history
 _HISTORY_METRICS = ("max_error", "impact_time_error", "peak_error", "wall_time")
 #: The ``kind`` of every study that records runs (its module's ``KIND``).
-STUDY_KINDS = ("compare", "matrix", "sweep", "tune")
+#: Studies that record runs (``kind`` in the store); a plugin study may add its own.
+STUDY_KINDS = ("compare", "matrix", "sweep", "tune", "fragility", "tilting", "collapse")
 
 
 def configure_history(p: argparse.ArgumentParser) -> None:
@@ -158,8 +159,9 @@ def configure_history(p: argparse.ArgumentParser) -> None:
     p.add_argument("--metric", "-m", action="append", default=None, metavar="NAME",
                    choices=sorted(NUMERIC_METRICS),
                    help=f"metric to show (repeatable; default: {', '.join(_HISTORY_METRICS)})")
-    p.add_argument("--kind", default=None, choices=STUDY_KINDS,
-                   help="only runs made by this study (default: every study)")
+    p.add_argument("--kind", default=None, metavar="KIND",
+                   help=f"only runs made by this study ({', '.join(STUDY_KINDS)}, ...; "
+                        "default: every study)")
     p.add_argument("--limit", type=int, default=50, metavar="N",
                    help="show the N latest runs per method (default: 50)")
     p.add_argument("--db", default=DEFAULT_DB, metavar="FILE",
