@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import shlex
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -26,6 +24,7 @@ from rockbench.cli.common import (
     add_engine_arguments,
     add_run_arguments,
     check_output_path,
+    command_line,
     engine_settings,
     execution_options,
     open_store,
@@ -140,8 +139,7 @@ def _run(args: argparse.Namespace, *, tilting: bool) -> int:
                     scenarios, engines, freqs, settings=settings, rtol=args.rtol,
                     max_factor=args.max_factor, execution=execution, store=store,
                     on_result=lambda job, tr: bar.advance(f"{job.scenario.name} {job.engine}"))
-    parts = ["rockbench", "assemblies" if tilting else "collapse", *sys.argv[2:]]
-    files = write_assembly_report(out, scenarios, cmps, study, command=shlex.join(parts),
+    files = write_assembly_report(out, scenarios, cmps, study, command=command_line(args),
                                   wall_time=time.perf_counter() - start,
                                   embed=not args.link_figures)
     for c in cmps:

@@ -18,7 +18,7 @@ from typing import Any
 
 from rockbench.errors import RockbenchError
 
-__all__ = ["selected_engines", "add_engine_arguments", "memory_budget",
+__all__ = ["command_line", "selected_engines", "add_engine_arguments", "memory_budget",
            "add_settings_arguments", "engine_settings", "Progress",
            "add_run_arguments", "add_store_arguments", "add_parallel_arguments",
            "add_worker_arguments",
@@ -69,6 +69,13 @@ def memory_budget(args: argparse.Namespace) -> Iterator[None]:
             os.environ.pop(BUDGET_ENV, None)
         else:
             os.environ[BUDGET_ENV] = old
+
+
+def command_line(args: argparse.Namespace) -> str:
+    """The command as the user gave it (``rockbench`` and the parsed arguments), for reports."""
+    import shlex
+
+    return shlex.join(["rockbench", *getattr(args, "argv", sys.argv[1:])])
 
 
 def selected_engines(spec: str, *, include_analytic: bool = True) -> list[str]:

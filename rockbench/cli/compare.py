@@ -10,7 +10,6 @@ Examples::
 from __future__ import annotations
 
 import argparse
-import shlex
 from pathlib import Path
 
 from rockbench.cli.common import (
@@ -18,12 +17,12 @@ from rockbench.cli.common import (
     add_engine_arguments,
     add_store_arguments,
     check_output_path,
+    command_line,
     engine_settings,
     execution_options,
     selected_engines,
 )
 from rockbench.errors import RockbenchError, UnknownScenario
-from rockbench.store import DEFAULT_DB
 
 __all__ = ["COMMANDS", "configure_compare", "execute_compare", "DEFAULT_PRESETS"]
 
@@ -82,37 +81,6 @@ def configure_compare(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-isolate", action="store_true",
                    help="run engines in this process (no crash/hang protection, no timeout)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar or summary")
-
-
-def _command_line(args: argparse.Namespace) -> str:
-    parts = ["rockbench", "compare"]
-    parts += ["--suite", args.suite] if args.suite else ["--scenarios", args.scenarios]
-    parts += ["--engine", args.engine]
-    if args.preset:
-        parts += ["--preset", args.preset]
-    if args.presets:
-        parts += ["--presets", args.presets]
-    if args.settings_file:
-        parts += ["--settings", str(args.settings_file)]
-    for s in args.set_options:
-        parts += ["--set", s]
-    parts += ["--out", args.out]
-    if args.jobs != 1:
-        parts += ["--jobs", str(args.jobs)]
-    if args.timeout:
-        parts += ["--timeout", f"{args.timeout:g}"]
-    if args.ensemble:
-        parts += ["--ensemble", str(args.ensemble)]
-    if args.horizon_members is not None:
-        parts += ["--horizon-members", str(args.horizon_members)]
-    if args.no_db:
-        parts.append("--no-db")
-    elif args.db != DEFAULT_DB:
-        parts += ["--db", args.db]
-    for flag in ("resume", "sensitivity", "link_figures", "no_isolate"):
-        if getattr(args, flag):
-            parts.append("--" + flag.replace("_", "-"))
-    return shlex.join(parts)
 
 
 def execute_compare(args: argparse.Namespace) -> int:
@@ -179,7 +147,7 @@ def execute_compare(args: argparse.Namespace) -> int:
         execution=execution,
         resume=args.resume, db=None if args.no_db else Path(args.db),
         sensitivity=sensitivity,
-        suite=label, command=_command_line(args), embed_figures=not args.link_figures,
+        suite=label, command=command_line(args), embed_figures=not args.link_figures,
         ensemble=args.ensemble,
         **({} if args.horizon_members is None else {"horizon_members": args.horizon_members}))
 

@@ -11,7 +11,6 @@ Examples::
 from __future__ import annotations
 
 import argparse
-import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -20,6 +19,7 @@ from rockbench.cli.common import (
     add_engine_arguments,
     add_run_arguments,
     check_output_path,
+    command_line,
     engine_settings,
     execution_options,
     selected_engines,
@@ -84,25 +84,6 @@ def configure_fragility(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar or summary")
 
 
-def _command_line(args: argparse.Namespace) -> str:
-    parts = ["rockbench", "fragility"]
-    parts += ["--scenario", args.scenario] if args.scenario else ["--block", args.block]
-    parts += ["--record-set", args.record_set]
-    if args.records:
-        parts += ["--records", args.records]
-    parts += ["--measure", args.measure, "--levels", args.levels, "--engine", args.engine]
-    if args.preset:
-        parts += ["--preset", args.preset]
-    for s in args.set_options:
-        parts += ["--set", s]
-    if args.theta_limit != 0.5:
-        parts += ["--theta-limit", f"{args.theta_limit:g}"]
-    parts += ["--jobs", str(args.jobs), "--out", args.out]
-    if args.resume:
-        parts.append("--resume")
-    return shlex.join(parts)
-
-
 def _scenario(args: argparse.Namespace) -> Scenario:
     from rockbench.scenarios import Block, Scenario, Stack, get_scenario
 
@@ -152,7 +133,7 @@ def execute_fragility(args: argparse.Namespace) -> int:
         execution=execution_options(args, isolate=not args.no_isolate), resume=args.resume,
         db=None if args.no_db else Path(args.db), set_name=args.record_set,
         n_resamples=args.resamples, confidence=args.confidence,
-        command=_command_line(args))
+        command=command_line(args))
 
     def progress(total: int, description: str) -> Progress:
         return Progress(total, description, quiet=args.quiet)
