@@ -125,10 +125,6 @@ class Excitation(ABC):
     def to_table(self) -> dict[str, Any]:
         """The ``[excitation]`` table (``type`` plus fields) that :meth:`from_table` reads back."""
 
-    def to_dict(self) -> dict[str, Any]:
-        """Same as :meth:`to_table` (the older name, still used by ``rockbench scenarios``)."""
-        return self.to_table()
-
     @classmethod
     def read_fields(cls, table: Mapping[str, Any],
                     required: tuple[str, ...] = ()) -> dict[str, Any]:

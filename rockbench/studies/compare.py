@@ -131,13 +131,10 @@ class PlannedRun:
         What to simulate.
     method : Method
         Engine and settings.
-    knobs : tuple of (str, value)
-        The knob overrides that define a sensitivity variation (display only).
     """
 
     scenario: Scenario
     method: Method
-    knobs: tuple[tuple[str, Any], ...] = ()
 
     @property
     def job(self) -> Job:
@@ -216,7 +213,7 @@ def _plan(opts: CompareOptions) -> tuple[list[PlannedRun], list[Method], Scenari
         planned, variations, skipped = sens.plan_sensitivity(engines, base=base)
         if not any(r.method.is_reference and r.scenario.name == b0.name for r in runs):
             runs.append(PlannedRun(b0, Method.reference()))
-        runs += [PlannedRun(b0, m, tuple(sorted(knobs.items()))) for m, knobs in planned]
+        runs += [PlannedRun(b0, m) for m in planned]
     _check_names(runs)
     return runs, methods, b0, variations, skipped
 

@@ -215,8 +215,7 @@ def map_knob(name: str, cls: type[Engine], knob: Knob) -> _Plan:
 
 def plan_sensitivity(engines: Sequence[str], *,
                      base: Mapping[str, Mapping[str, Any]] | None = None,
-                     ) -> tuple[list[tuple[Method, dict[str, Any]]], list[Variation],
-                                list[Skipped]]:
+                     ) -> tuple[list[Method], list[Variation], list[Skipped]]:
     """Methods of the sensitivity study for the given engines.
 
     Parameters
@@ -229,10 +228,10 @@ def plan_sensitivity(engines: Sequence[str], *,
     Returns
     -------
     methods, variations, skipped
-        One (method, knob overrides) per variation, the variations, and what was
-        skipped with the reasons.
+        One method per variation (its settings hold the knob overrides), the
+        variations, and what was skipped with the reasons.
     """
-    methods: list[tuple[Method, dict[str, Any]]] = []
+    methods: list[Method] = []
     variations: list[Variation] = []
     skipped: list[Skipped] = []
     for eng in engines:
@@ -249,6 +248,6 @@ def plan_sensitivity(engines: Sequence[str], *,
                 settings = {**start, **v.overrides}
                 cls.settings(settings.get("preset"),
                              **{k: x for k, x in settings.items() if k != "preset"})
-                methods.append((Method.of(eng, settings, variation=v.label), dict(v.overrides)))
+                methods.append(Method.of(eng, settings, variation=v.label))
                 variations.append(v)
     return methods, variations, skipped
