@@ -406,6 +406,91 @@ def test_support_reactions_balance_the_loads_at_collapse(direction):
                                atol=1e-8 * weight)
 
 
+# ------------------------------------------------- non-associative (real) Coulomb joints
+def _running_bond(courses: int, bricks: int, length: float = 0.24, height: float = 0.12
+                  ) -> tuple[Assembly, list[tuple[float, float, float]]]:
+    """A running-bond wall (half bricks at both ends of every second course) and its bricks
+    as (x, z, width), in the order of its blocks."""
+    x0 = -0.5 * bricks * length
+    bricks_xzw = []
+    for c in range(courses):
+        z = (c + 0.5) * height
+        if c % 2 == 0:
+            row = [(x0 + (k + 0.5) * length, length) for k in range(bricks)]
+        else:
+            row = ([(x0 + 0.25 * length, 0.5 * length)]
+                   + [(x0 + (k + 1.0) * length, length) for k in range(bricks - 1)]
+                   + [(-x0 - 0.25 * length, 0.5 * length)])
+        bricks_xzw += [(x, z, w) for x, w in row]
+    blocks = tuple(PlanarBlock.rectangle(w, height, (x, z), density=RHO) for x, z, w in bricks_xzw)
+    return Assembly(blocks, (Support.ground(-1.0, 1.0),)), bricks_xzw
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+def test_running_bond_wall_turns_a_stepped_wedge_out_with_coulomb_joints(direction):
+    # 6 courses of 3 bricks 0.24 x 0.12, mu = 1. With real (non-dilatant) joints the
+    # wedge above the first course, bounded by the 45° stepped line from the course's
+    # leeward corner, turns about that corner while its head joints open: by virtual
+    # work α = Σ m (x_pivot − x) / Σ m (z − z_pivot) = 3.30 / 5.70 = 11/19 (mass ∝ width).
+    wall, bricks = _running_bond(6, 3)
+    edge, z0, h = 0.36, 0.12, 0.12
+
+    def in_wedge(x: float, z: float, w: float) -> bool:
+        lee = direction * x + 0.5 * w  # the brick's leeward edge, mirrored for direction −1
+        windward = lee - w
+        return z > z0 and windward >= edge - (z + 0.5 * h - z0) - 1e-12 and lee <= edge + 1e-12
+
+    wedge = tuple(i for i, (x, z, w) in enumerate(bricks) if in_wedge(x, z, w))
+    assert len(wedge) == 9
+    lever = sum(w * (edge - direction * bricks[i][0]) for i in wedge for w in [bricks[i][2]])
+    arm = sum(bricks[i][2] * (bricks[i][1] - z0) for i in wedge)
+    assert lever / arm == pytest.approx(11 / 19, rel=1e-12)
+    r = limit_analysis(wall, friction=1.0, direction=direction, flow="non-associative")
+    assert_bounds_agree(r)
+    assert r.load_factor == pytest.approx(11 / 19, rel=1e-8)
+    assert r.moving_blocks == wedge and r.governing_mode == "rocking"
+    for m in (r.mechanism[i] for i in wedge):  # one rigid rotation about the pivot corner
+        assert m.kind == "rotation" and m.rotation_sign == direction
+        np.testing.assert_allclose(m.centre, [direction * edge, z0], atol=1e-7)
+    # the associative LP presses the head joints with a prestress nothing creates and
+    # leans on their friction: 0.992, near the monolithic 1 (b/h of the panel, and μ)
+    assoc = limit_analysis(wall, friction=1.0, direction=direction)
+    assert assoc.load_factor == pytest.approx(0.99232, abs=1e-5)
+    assert r.flow == "non-associative" and r.iterations > 1 and assoc.iterations == 0
+
+
+def test_coulomb_forces_at_the_walls_collapse_are_admissible_and_balance_the_loads():
+    wall, _ = _running_bond(6, 3)
+    r = limit_analysis(wall, friction=1.0, flow="non-associative")
+    weight = sum(b.mass for b in wall.blocks) * G
+    total = np.zeros(2)
+    for itf, f, j in zip(wall.interfaces, r.interface_forces, r.joints, strict=True):
+        assert np.all(f.normal >= -1e-9 * weight)
+        assert np.all(np.abs(f.shear) <= f.normal + 1e-9 * weight)  # |T| ≤ μ N
+        # no force where the joint opens
+        assert np.all(f.normal[j.opening > 1e-6] <= 1e-9 * weight)
+        if wall.is_support(itf.b):  # the force on the base is N n + T t
+            total += f.normal.sum() * itf.normal + f.shear.sum() * itf.tangent
+    np.testing.assert_allclose(total, [r.load_factor * weight, -weight], atol=1e-8 * weight)
+
+
+@pytest.mark.parametrize(
+    "assembly,friction",
+    [(block_stack([(1.0, 3.0)]), 1.0),  # rocks at b/h
+     (block_stack([(2.0, 1.0)]), 0.5),  # slides at μ
+     (block_stack([(1.0, 3.0), (0.6, 2.0)]), 1.0),
+     (_parapet(0.2), 0.8),
+     (semicircular_arch(16, 0.15), 0.4),  # slides at a springing, hinges elsewhere
+     (semicircular_arch(9, 0.15), 1.0)],
+)
+def test_non_associative_flow_keeps_the_factor_where_the_lp_is_exact(assembly, friction):
+    assoc = limit_analysis(assembly, friction=friction)
+    real = limit_analysis(assembly, friction=friction, flow="non-associative")
+    assert_bounds_agree(real)
+    assert real.load_factor == pytest.approx(assoc.load_factor, rel=1e-8)
+    assert real.moving_blocks == assoc.moving_blocks
+
+
 # -------------------------------------------------------------- validation
 def test_interfaces_found_with_their_segments():
     a = block_stack([(1.0, 1.0), (0.3, 1.0)], offsets=[0.0, 0.4])
@@ -432,7 +517,9 @@ def test_interfaces_found_with_their_segments():
                        (Support.ground(-1, 1),)), "overlap"),
      (lambda: Assembly((), (Support.ground(-1, 1),)), "at least one PlanarBlock"),
      (lambda: limit_analysis(block_stack([(1, 1)]), direction=0), "direction"),
-     (lambda: limit_analysis(block_stack([(1, 1)]), friction=-0.1), "friction")],
+     (lambda: limit_analysis(block_stack([(1, 1)]), friction=-0.1), "friction"),
+     (lambda: limit_analysis(block_stack([(1, 1)]), flow="plastic"), "flow"),
+     (lambda: limit_analysis(block_stack([(1, 1)]), flow="non-associative"), "finite friction")],
 )
 def test_invalid_input_is_rejected_with_a_clear_message(make, match):
     with pytest.raises(ValueError, match=match):
