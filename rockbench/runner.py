@@ -68,8 +68,8 @@ from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = ["Job", "ExecutionOptions", "ExecutionError", "TaskFault", "run_job", "run_jobs",
-           "map_tasks", "default_jobs", "run_job_subprocess", "dask_client", "EXECUTORS",
-           "DEFAULT_TIMEOUT", "WORKER_HEADROOM_GB", "WorkerGroup", "limit_memory"]
+           "cost_hint", "map_tasks", "default_jobs", "run_job_subprocess", "dask_client",
+           "EXECUTORS", "DEFAULT_TIMEOUT", "WORKER_HEADROOM_GB", "WorkerGroup", "limit_memory"]
 
 #: Names accepted by ``ExecutionOptions(executor=...)`` and ``--executor``.
 EXECUTORS = ("process", "dask")
@@ -379,8 +379,32 @@ def run_jobs(
         return map_tasks(run_job, jobs, ex, on_done=done)
     groups = {name: WorkerGroup(name, not ex.warm or _keeps_state(name))
               for name in {j.engine for j in jobs}}
+    # longest first: the last runs dispatched are the short ones, so that no worker
+    # idles at the end of a study while another finishes a 20 s free-rocking run
+    order = sorted(range(len(jobs)), key=lambda i: -cost_hint(jobs[i]))
     return map_tasks(_pool_job, jobs, ex, on_done=done, on_fault=failed,
-                     timeout_of=lambda i: limit(jobs[i]), group_of=lambda i: groups[jobs[i].engine])
+                     timeout_of=lambda i: limit(jobs[i]), group_of=lambda i: groups[jobs[i].engine],
+                     order=order)
+
+
+def cost_hint(job: Job) -> float:
+    """A rough relative cost of ``job`` for the dispatch order: simulated time ×
+    blocks / the engine's time step (its ``timestep`` knob, else the output interval).
+
+    Engines differ in cost per step by orders of magnitude, so this only ranks a
+    study's runs within an engine and by duration; a job whose settings do not
+    resolve gets 0 (its worker reports the error).
+    """
+    sc = job.scenario
+    try:
+        step = getattr(engine_class(job.engine).settings(
+            job.settings.get("preset"), **{k: v for k, v in job.settings.items()
+                                          if k != "preset"}), "timestep", None)
+    except (RockbenchError, TypeError):
+        return 0.0
+    if not isinstance(step, float) or not step > 0:
+        step = 1.0 / sc.output_rate
+    return sc.duration * sc.n_blocks / step
 
 
 def _keeps_state(name: str) -> bool:
@@ -422,6 +446,7 @@ def map_tasks(
     timeout_of: Callable[[int], float | None] | None = None,
     fresh: bool = False,
     group_of: Callable[[int], WorkerGroup] | None = None,
+    order: Sequence[int] | None = None,
 ) -> list[Any]:
     """Apply a picklable function to each task, locally or on Dask: the one dispatcher.
 
@@ -455,6 +480,9 @@ def map_tasks(
         as ``fresh``): a local pool per group, at most ``execution.jobs`` tasks
         in flight over all of them. A worker killed at a time limit or dead
         fails only its task; its pool starts a new one.
+    order : sequence of int, optional
+        The order in which the local pool dispatches the tasks (a permutation of
+        their indices; default: as given). Results keep the order of ``tasks``.
 
     Raises
     ------
@@ -504,7 +532,9 @@ def map_tasks(
             pools[g].close()  # its workers end when their last task is done
         return fut
 
-    waiting = deque(range(len(tasks)))
+    waiting = deque(range(len(tasks)) if order is None else order)
+    if sorted(waiting) != list(range(len(tasks))):
+        raise ValueError("order must be a permutation of the task indices")
     running: dict[Any, int] = {}
     try:
         while waiting or running:

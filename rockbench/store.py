@@ -45,7 +45,7 @@ from rockbench.errors import RockbenchError
 from rockbench.evaluation import RunMetrics
 from rockbench.method import Method
 from rockbench.scenarios import Scenario, scenario_to_dict
-from rockbench.trajectory import Status, Trajectory
+from rockbench.trajectory import Status, Trajectory, write_npz
 
 __all__ = ["Store", "RunRecord", "StoreError", "scenario_hash", "settings_key", "machine",
            "jsonable", "DEFAULT_DB"]
@@ -447,7 +447,7 @@ class Store:
                   "wobble": traj.wobble}
         if traj.impacts is not None:
             arrays["impacts"] = traj.impacts
-        np.savez_compressed(buf, **arrays)
+        write_npz(buf, arrays)
         meta = traj.metadata()
         self.db.execute(
             "INSERT OR REPLACE INTO refs VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",

@@ -17,6 +17,7 @@ from rockbench.runner import (
     ExecutionError,
     ExecutionOptions,
     Job,
+    cost_hint,
     default_jobs,
     map_tasks,
     run_job,
@@ -132,6 +133,32 @@ def test_map_tasks_dispatches_any_function_locally() -> None:
     assert out == [4, -1] and faults == ["timeout"]
     with pytest.raises(RockbenchError, match="task 2 of 2 failed: killed after the 1 s limit"):
         map_tasks(_square, [2, -1], ExecutionOptions(jobs=2, timeout=1.0))
+
+
+def test_map_tasks_dispatches_in_the_order_asked_and_returns_in_task_order() -> None:
+    seen: list[int] = []
+    out = map_tasks(_square, [3, 1, 2], ExecutionOptions(jobs=1), order=[2, 0, 1],
+                    on_done=lambda i, v: seen.append(i))
+    assert out == [9, 1, 4] and seen == [2, 0, 1]  # one worker: done in dispatch order
+    with pytest.raises(ValueError, match="permutation"):
+        map_tasks(_square, [3, 1], ExecutionOptions(jobs=1), order=[0, 0])
+
+
+def test_run_jobs_dispatches_the_longest_runs_first() -> None:
+    # the same engine: cost ∝ duration × blocks / step, so the 0.3 s run at the
+    # finer step goes first, the short one at the coarse step last
+    short = SCENARIO.replace(name="short", duration=0.1)
+    jobs = [Job(short, "fault", {"timestep": 1e-3}), Job(SCENARIO, "fault", {"timestep": 1e-3}),
+            Job(SCENARIO, "fault", {"timestep": 5e-4})]
+    hints = [cost_hint(j) for j in jobs]
+    assert hints == pytest.approx([100.0, 300.0, 600.0])
+    seen: list[str] = []
+    trajs = run_jobs(jobs, ExecutionOptions(jobs=1),
+                     on_result=lambda j, t: seen.append(f"{j.scenario.name}/{j.settings}"))
+    assert seen == ["tiny-free/{'timestep': 0.0005}", "tiny-free/{'timestep': 0.001}",
+                    "short/{'timestep': 0.001}"]
+    assert [t.scenario for t in trajs] == ["short", "tiny-free", "tiny-free"]
+    assert cost_hint(Job(SCENARIO, "fault", {"no_such_knob": 1})) == 0.0
 
 
 def test_subprocess_isolation_ships_runtime_registrations() -> None:
