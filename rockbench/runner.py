@@ -520,17 +520,33 @@ def map_tasks(
     pools: dict[WorkerGroup, ProcessPool] = {}
     memory = ex.worker_memory_bytes()
 
+    workers: dict[WorkerGroup, int] = {}  # the workers of each group's pool
+    queued: Counter[WorkerGroup] = Counter()  # each group's tasks handed to its pool, not done
+
     def schedule(i: int) -> Any:
         g = group(i)
         if g not in pools:
-            pools[g] = ProcessPool(max_workers=min(ex.jobs, left[g]),
+            workers[g] = min(ex.jobs, left[g])
+            pools[g] = ProcessPool(max_workers=workers[g],
                                    max_tasks=1 if g.fresh else 0, context=_context(),
                                    initializer=_init_worker, initargs=(os.getpid(), memory))
         fut = pools[g].schedule(fn, args=(tasks[i],), timeout=limit(i))
         left[g] -= 1
+        queued[g] += 1
         if not left[g]:
             pools[g].close()  # its workers end when their last task is done
         return fut
+
+    def can_schedule(i: int) -> bool:
+        # at most ``jobs`` tasks run at once over all pools; a pool whose workers are
+        # all busy may hold one more task per worker in its queue, which a worker
+        # starts as soon as it is free (no round trip through this loop between two
+        # short runs). Pebble counts a time limit from the task's start, not from here.
+        g = group(i)
+        n = workers.get(g, min(ex.jobs, left[g]))
+        if queued[g] >= n:
+            return queued[g] < 2 * n
+        return sum(min(q, workers[h]) for h, q in queued.items()) < ex.jobs
 
     waiting = deque(range(len(tasks)) if order is None else order)
     if sorted(waiting) != list(range(len(tasks))):
@@ -538,14 +554,13 @@ def map_tasks(
     running: dict[Any, int] = {}
     try:
         while waiting or running:
-            # only as many in flight as workers asked for: the others wait here, so
-            # that a time limit never counts time spent queueing behind other runs
-            while waiting and len(running) < ex.jobs:
+            while waiting and can_schedule(waiting[0]):
                 i = waiting.popleft()
                 running[schedule(i)] = i
             ready, _ = wait(running, return_when=FIRST_COMPLETED)
             for fut in ready:
                 i = running.pop(fut)
+                queued[group(i)] -= 1
                 try:
                     value = fut.result()
                 except FutureTimeout:
