@@ -286,6 +286,16 @@ def _result(sc: Any, traj: Any, ref: Any) -> CaseResult:
                       float(traj.cpu_time), float(traj.wall_time))
 
 
+_REFS: dict[str, Any] = {}
+
+
+def _reference(name: str) -> Any:
+    """The analytic reference of catalog case ``name`` (computed once per process)."""
+    if name not in _REFS:
+        _REFS[name] = analytic.reference(get_scenario(name))
+    return _REFS[name]
+
+
 class _Runs:
     """The engine's runs, memoised (and kept in a JSON-lines cache file if given)."""
 
@@ -293,7 +303,7 @@ class _Runs:
                  jobs: int, cache: Path | None, log: Any) -> None:
         self.engine, self.cands, self.jobs, self.cache, self.log = engine, cands, jobs, cache, log
         self.scen = {n: get_scenario(n) for n in names}
-        self.refs = {n: analytic.reference(sc) for n, sc in self.scen.items()}
+        self.refs = {n: _reference(n) for n in names}
         self.done: dict[tuple[str, str], CaseResult] = {}
         self.timeout = 1800.0
         self.n_runs = 0
