@@ -306,7 +306,6 @@ class _Runs:
         self.refs = {n: _reference(n) for n in names}
         self.done: dict[tuple[str, str], CaseResult] = {}
         self.timeout = 1800.0
-        self.n_runs = 0
         if cache is not None and cache.exists():
             for line in cache.read_text().splitlines():
                 r = json.loads(line)
@@ -322,13 +321,12 @@ class _Runs:
         todo = [p for p in dict.fromkeys(pairs) if p not in self.done]
         if not todo:
             return
-        jobs = [Job(self.scen[n], self.engine, self.cands[lab]) for lab, n in todo]
-        trajs = run_jobs(jobs, ExecutionOptions(jobs=min(self.jobs, len(todo)),
-                                                timeout=self.timeout))
-        for (lab, n), tr in zip(todo, trajs, strict=True):
+        jobs = [Job(self.scen[n], self.engine, self.cands[lab], label=lab) for lab, n in todo]
+
+        def done(job: Job, tr: Any) -> None:  # as each run ends (progress, cache)
+            lab, n = job.label, job.scenario.name
             r = _result(self.scen[n], tr, self.refs[n])
             self.done[lab, n] = r
-            self.n_runs += 1
             print(f"[pareto] {self.engine} {lab} | {n}: {r.status} {r.error:.2e} λ "
                   f"{100 * r.peak:.2f} % {r.cpu:.2f} s CPU", file=self.log, flush=True)
             if self.cache is not None:
@@ -337,6 +335,9 @@ class _Runs:
                                             settings=self.cands[lab], case=n,
                                             status=r.status.value, error=r.error, peak=r.peak,
                                             cpu=r.cpu, wall=r.wall)) + "\n")
+
+        run_jobs(jobs, ExecutionOptions(jobs=min(self.jobs, len(todo)), timeout=self.timeout),
+                 on_result=done)
 
     def results(self, label: str, cases: Sequence[str]) -> dict[str, CaseResult]:
         self.run_many([(label, n) for n in cases])
