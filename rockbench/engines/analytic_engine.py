@@ -41,8 +41,10 @@ class AnalyticEngine(Engine):
     """Housner (one block) and the two-block model of Psycharis / Spanos et al."""
 
     name: ClassVar[str] = "analytic"
-    capabilities: ClassVar[Capabilities] = Capabilities(dimensions=2, max_blocks=2,
-                                                        analytic=True)
+    capabilities: ClassVar[Capabilities] = Capabilities(
+        dimensions=2, max_blocks=2, analytic=True,
+        no_assemblies="no dynamic closed form exists; an assembly's reference is its "
+                      "limit-analysis collapse factor (rockbench collapse)")
     Settings: ClassVar[type[EngineSettings]] = AnalyticSettings
     presets: ClassVar[dict] = {"accurate": {}, "fast": {}, "linear": {"linear": True}}
     # rockbench's own code on its core dependencies (NumPy, SciPy): nothing to install

@@ -131,6 +131,8 @@ class Capabilities:
         Whether it builds :class:`~rockbench.scenarios.assembly.Assembly` scenes
         (blocks at any pose, convex prisms, fixed supports); others return
         ``unsupported`` for them.
+    no_assemblies : str
+        Why not, when ``assemblies`` is False (the unsupported status says it).
     """
 
     dimensions: int = 3
@@ -138,6 +140,7 @@ class Capabilities:
     chamfer: bool = True
     analytic: bool = False
     assemblies: bool = False
+    no_assemblies: str = "only single blocks and stacks are built"
 
 
 def angles_from_quaternions(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -246,7 +249,7 @@ class Engine(ABC):
             )
         if scenario.is_assembly and not cap.assemblies:
             raise UnsupportedScenario(
-                f"{self.name} does not build block assemblies (only single blocks and stacks)")
+                f"{self.name} does not build block assemblies: {cap.no_assemblies}")
         if not cap.chamfer and any(b.chamfer > 0 for b in scenario.blocks):
             raise UnsupportedScenario(f"{self.name} does not model chamfered blocks")
         self._check_supported(scenario)
