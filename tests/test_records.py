@@ -223,3 +223,15 @@ def test_a_malformed_record_names_the_scenario_and_the_record(tmp_path):
         path.write_text(text.replace(old, new))
         with pytest.raises(ScenarioError, match=match):
             load_scenario(path)
+
+
+def test_records_compare_by_value():
+    from rockbench.scenarios.excitation import Record
+
+    t, a = np.linspace(0.0, 1.0, 11), np.sin(np.linspace(0.0, 3.0, 11))
+    one, same = Record(times=t, accelerations=a), Record(times=t.copy(), accelerations=a.copy())
+    assert one == same and hash(one) == hash(same) and len({one, same}) == 1
+    assert one != Record(times=t, accelerations=2 * a) and one != Record(t, a, scale=2.0)
+    sc = get_scenario("single-pulse-3.0hz-8mm")
+    assert sc.replace(excitation=one) == sc.replace(excitation=same)
+

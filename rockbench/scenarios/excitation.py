@@ -730,6 +730,18 @@ class Record(Excitation):
                 "accelerations")
         object.__setattr__(self, "_tab", (t, a, v, u))
 
+    def __eq__(self, other: object) -> bool:
+        # the generated __eq__ compares the arrays element-wise and cannot tell a bool
+        if not isinstance(other, Record):
+            return NotImplemented
+        return ((self.scale, self.source, self.units) == (other.scale, other.source, other.units)
+                and np.array_equal(self.times, other.times)
+                and np.array_equal(self.accelerations, other.accelerations))
+
+    def __hash__(self) -> int:
+        return hash((self.times.tobytes(), self.accelerations.tobytes(), self.scale,
+                     self.source, self.units))
+
     @property
     def end_time(self) -> float:
         return float(self.times[-1])
