@@ -25,7 +25,6 @@ The reference is ``rockbench.analytic.housner.single_block_reference``.
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 from typing import Any
@@ -34,7 +33,6 @@ import numpy as np
 
 from rockbench.analytic.housner import single_block_reference
 from rockbench.engines.opensees_engine import OpenseesEngine
-from rockbench.metrics import zero_crossings
 from rockbench.scenarios import Scenario, get_scenario
 
 try:
@@ -56,30 +54,33 @@ PULSE_COLS = [cal.col("pulse", "case"), cal.col("status", "status"),
               cal.ratio_col("+.2f"), UNCONVERGED, cal.WALL_S, cal.CPU]
 
 
-def search(zetas: list[float], overrides: dict, preset: str) -> None:
-    """The ζ grid on B0–B3 up to their third impact (module docstring)."""
-    print(f"### ζ search, preset `{preset}`, overrides {overrides or 'none'}\n")
-    print("| ζ | " + " | ".join(f"{c}: err/λ, impacts %" for c in SEARCH_CASES) + " | worst |")
-    print("|---|" + "---|" * (len(SEARCH_CASES) + 1))
-    for zeta in zetas:
-        s = OpenseesEngine.settings(preset, **overrides).replace(damping_ratio=zeta)
-        cells, worst = [], 0.0
+def search(knob: str, values: list[float], overrides: dict, preset: str,
+           duration: float | None) -> None:
+    """A grid of one knob on B0–B3: up to their third impact, or over ``duration`` s
+    (errors until the reference comes to rest; module docstring)."""
+    span = "third impact" if duration is None else f"{duration:g} s"
+    print(f"### {knob} search up to the {span}, preset `{preset}`, overrides "
+          f"{overrides or 'none'}\n")
+    print(f"| {knob} | " + " | ".join(f"{c}: err/λ, impacts %" for c in SEARCH_CASES)
+          + " | worst | CPU s |")
+    print("|---|" + "---|" * (len(SEARCH_CASES) + 2))
+    bound = 0.005 if duration is None else 0.01
+    for value in values:
+        s = OpenseesEngine.settings(preset, **overrides).replace(**{knob: value})
+        cells, worst, cpu = [], 0.0, 0.0
         for name in SEARCH_CASES:
             sc0 = get_scenario(name)
             ref = single_block_reference(sc0)
             imp = np.asarray(ref.impacts)[:3]
-            sc = sc0.replace(duration=float(imp[-1]) + 0.05)
-            tr = ENGINE.simulate(sc, s)
-            th = tr.theta[:, 0]
-            n = min(th.size, ref.theta.shape[0])
-            err = float(np.max(np.abs(th[:n] - ref.theta[:n, 0]))) / sc.critical_angle
-            zc = zero_crossings(tr.t, th)[:3]
-            rel = [100 * (zc[k] - imp[k]) / imp[k] if k < zc.size else math.nan
-                   for k in range(3)]
-            worst = max(worst, err / 0.005, *(abs(r) / 0.5 for r in rel))
-            cells.append(f"{err:.4f}, " + "/".join(f"{r:+.2f}" for r in rel))
-        # worst: the largest error as a fraction of its bound (0.005 λ, 0.5 %)
-        print(f"| {zeta:g} | " + " | ".join(cells) + f" | {worst:.2f} |", flush=True)
+            sc = sc0.replace(duration=float(imp[-1]) + 0.05 if duration is None else duration)
+            r = cal.measure_free(ENGINE, s, sc)
+            cpu += r["cpu"]
+            worst = max(worst, r["err"] / bound, *(abs(x) / 0.5 for x in r["imp"]))
+            cells.append(f"{r['err']:.4f}, " + "/".join(f"{x:+.2f}" for x in r["imp"]))
+        # worst: the largest error as a fraction of its bound (0.005 λ to the third
+        # impact or 0.01 λ over the run, 0.5 % on the impact times)
+        print(f"| {value:g} | " + " | ".join(cells) + f" | {worst:.2f} | {cpu:.1f} |",
+              flush=True)
     print()
 
 
@@ -124,12 +125,16 @@ def run_stacks(settings: object) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     ap = cal.parser(__doc__)
-    ap.add_argument("--search", default="", help="comma list of ζ to search (B0–B3)")
+    ap.add_argument("--search", default="", help="comma list of values to search (B0–B3)")
+    ap.add_argument("--knob", default="damping_ratio", help="the knob --search varies")
+    ap.add_argument("--search-duration", type=float, default=None,
+                    help="search over this many seconds (default: to the third impact)")
     ap.add_argument("--stacks", action="store_true", help="also the two-block pulses")
     args = ap.parse_args(argv)
     if args.search:
         for preset in args.preset.split(","):
-            search([float(z) for z in args.search.split(",")], cal.overrides(args), preset)
+            search(args.knob, [float(z) for z in args.search.split(",")], cal.overrides(args),
+                   preset, args.search_duration)
         return 0
     code = cal.run(args, ENGINE, "opensees", FREE_COLS, PULSE_COLS, total=True,
                    overhead=lambda s, dur: cal.print_overhead(

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
-from rockbench.engines.opensees_engine import OpenseesEngine, OpenseesSettings
+from rockbench.engines.opensees_engine import OpenseesEngine, OpenseesSettings, _drop_exit_line
 from rockbench.engines.settings import SettingsError
 from rockbench.errors import EngineUnavailable
 from rockbench.scenarios import Block, Contact, Scenario, SinePulse, Stack
@@ -187,3 +190,31 @@ def test_model_is_wiped_between_runs() -> None:
     engine.simulate(Scenario("stack", Stack(PAPER_STACK.blocks), duration=0.1), "fast")
     again = engine.simulate(sc, "fast")
     np.testing.assert_array_equal(first.theta, again.theta)
+
+
+# ---------------------------------------------------------------- process exit
+def test_exit_line_is_dropped_and_nothing_else() -> None:
+    """OpenSees's "Process 0 Terminating" at exit is filtered; other stderr output is kept,
+    including what an exit handler registered before the import writes."""
+    code = ("import atexit, sys\n"
+            "atexit.register(lambda: print('late', file=sys.stderr))\n"
+            "from rockbench.engines.opensees_engine import OpenseesEngine\n"
+            "OpenseesEngine.version()\n"
+            "print('early', file=sys.stderr)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=60, check=True)
+    assert out.stderr == "early\nlate\n"
+
+
+def test_exit_filter_copies_pieces_and_drops_only_the_exit_line() -> None:
+    r, w = os.pipe()
+    r2, w2 = os.pipe()
+    # OpenSees writes the line in three pieces
+    for piece in (b"keep 1\nProcess ", b"0", b" Terminating\n", b"Process 12 ok\n", b"tail"):
+        os.write(w, piece)
+    os.close(w)
+    _drop_exit_line(r, w2)
+    os.close(w2)
+    assert os.read(r2, 1000) == b"keep 1\nProcess 12 ok\ntail"
+    os.close(r)
+    os.close(r2)

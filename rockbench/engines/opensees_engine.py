@@ -103,10 +103,13 @@ commercial redistribution needs a licence from its authors.
 
 from __future__ import annotations
 
+import atexit
 import ctypes
 import importlib.util
 import math
 import os
+import re
+import sys
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
@@ -123,6 +126,66 @@ __all__ = ["OpenseesEngine", "OpenseesSettings"]
 _MODULE = "openseespy.opensees"
 #: Stiffness fraction of the contact dashpots' gating springs (see the module docstring).
 _EPS_DAMP = 1e-3
+#: The line OpenSees writes to the C stderr when the interpreter exits.
+_EXIT_LINE = re.compile(rb"Process \d+ Terminating\n")
+_exit_filter_registered = False
+
+
+def _drop_exit_line(read_fd: int, write_fd: int) -> None:
+    """Copy ``read_fd`` to ``write_fd`` until EOF, without OpenSees's exit line."""
+    pending = b""
+    while chunk := os.read(read_fd, 65536):
+        lines = (pending + chunk).splitlines(keepends=True)
+        # hold back an unfinished last line only while it may become the exit line
+        last = lines[-1] if lines else b""
+        pending = last if not last.endswith(b"\n") and b"Process ".startswith(
+            last[:8]) else b""
+        for line in lines[:-1] if pending else lines:
+            if not _EXIT_LINE.fullmatch(line):
+                os.write(write_fd, line)
+    if pending:
+        os.write(write_fd, pending)
+
+
+def _filter_exit_stderr() -> None:
+    """At interpreter exit, route fd 2 through a child that drops OpenSees's exit line.
+
+    OpenSeesPy's exit hook (``Py_AtExit``) deletes its interpreter, whose
+    destructor writes "Process 0 Terminating" after Python has released
+    ``sys.stderr``, so the line reaches the C stderr whatever Python does with
+    its own streams (``logFile -noEcho`` and ``wipe()`` do not stop it). This
+    runs in Python's exit phase: fd 2 becomes a pipe to a forked child that
+    copies everything to the original stderr except that one line, and exits
+    when this process has exited (end of the pipe). Nothing else is lost.
+    """
+    if not hasattr(os, "fork"):
+        return
+    try:
+        r, w = os.pipe()
+        pid = os.fork()
+    except OSError:  # no pipe or process to spare: the line stays
+        return
+    if pid == 0:  # the child: copy, then leave without Python's exit machinery
+        code = 0
+        try:
+            os.close(w)
+            _drop_exit_line(r, 2)
+        except BaseException:  # noqa: BLE001 - a child that fails must still exit
+            code = 1
+        finally:
+            os._exit(code)
+    os.close(r)
+    sys.stderr.flush()
+    os.dup2(w, 2)
+    os.close(w)
+
+
+def _register_exit_filter() -> None:
+    """Register :func:`_filter_exit_stderr` once, when OpenSeesPy is first imported."""
+    global _exit_filter_registered
+    if not _exit_filter_registered:
+        _exit_filter_registered = True
+        atexit.register(_filter_exit_stderr)
 
 
 def _preload_bundled_blas() -> None:
@@ -164,13 +227,22 @@ class OpenseesSettings(EngineSettings):
         ζ of each interface's vertical mode given by the contact dashpots
         (β = 2ζ/ω_c): the knob that sets the energy an impact removes.
         Calibrated against Housner's η (module docstring).
+    damping_onset : float
+        Compression beyond which a point's dashpot acts, as a multiple of the
+        static settlement g/ω_c² (0: as soon as the point is in contact). Above
+        the compression of a pivot under the weight it carries, a pivot lifts
+        off without its dashpot holding it back (module docstring).
     body_stiffness : float
         Stiffness of the beams that make a block rigid, as a multiple of the
         interface stiffness they connect to.
-    integrator : {"newmark", "hht"}
-        Newmark average acceleration, or Hilber–Hughes–Taylor with ``alpha``.
+    integrator : {"newmark", "hht", "generalized-alpha"}
+        Newmark average acceleration, Hilber–Hughes–Taylor with ``alpha``, or the
+        generalized-α method (Chung & Hulbert) with spectral radius ``rho_inf``.
     alpha : float
         HHT α in [2/3, 1] (1: no numerical damping, the same as Newmark).
+    rho_inf : float
+        Generalized-α spectral radius at infinite frequency, in [0, 1] (1: no
+        numerical damping; 0: modes far above 1/Δt are removed within a step).
     tolerance : float
         Newton convergence: norm of the displacement increment as a fraction of
         the static settlement g/ω_c² (a contact force within that fraction of
@@ -183,9 +255,11 @@ class OpenseesSettings(EngineSettings):
     springs: int = 2
     contact_frequency: float = 1000.0
     damping_ratio: float = 1.6
+    damping_onset: float = 0.0
     body_stiffness: float = 1e4
-    integrator: Literal["newmark", "hht"] = "newmark"
+    integrator: Literal["newmark", "hht", "generalized-alpha"] = "newmark"
     alpha: float = 1.0
+    rho_inf: float = 1.0
     tolerance: float = 1e-4
     iterations: int = 25
 
@@ -196,12 +270,16 @@ class OpenseesSettings(EngineSettings):
                 raise ValueError(f"{name} must be finite and > 0, got {v!r}")
         if not (math.isfinite(self.damping_ratio) and self.damping_ratio >= 0):
             raise ValueError(f"damping_ratio must be finite and >= 0, got {self.damping_ratio!r}")
+        if not (math.isfinite(self.damping_onset) and self.damping_onset >= 0):
+            raise ValueError(f"damping_onset must be finite and >= 0, got {self.damping_onset!r}")
         if self.springs < 2:
             raise ValueError(f"springs must be >= 2, got {self.springs!r}")
         if self.iterations < 1:
             raise ValueError(f"iterations must be >= 1, got {self.iterations!r}")
         if not (2.0 / 3.0 <= self.alpha <= 1.0):
             raise ValueError(f"alpha must be in [2/3, 1], got {self.alpha!r}")
+        if not (0.0 <= self.rho_inf <= 1.0):
+            raise ValueError(f"rho_inf must be in [0, 1], got {self.rho_inf!r}")
 
 
 @dataclass(frozen=True)
@@ -252,9 +330,14 @@ class OpenseesEngine(Engine):
     # ------------------------------------------------------------------ library
     @classmethod
     def library(cls, module: str) -> Any:
-        """Import OpenSeesPy (rule 2), loading the BLAS its Linux wheel bundles first."""
+        """Import OpenSeesPy (rule 2), loading the BLAS its Linux wheel bundles first.
+
+        Its exit message is filtered out of stderr (:func:`_filter_exit_stderr`).
+        """
         _preload_bundled_blas()
-        return super().library(module)
+        lib = super().library(module)
+        _register_exit_filter()
+        return lib
 
     @classmethod
     def version(cls) -> str:
@@ -321,6 +404,7 @@ class OpenseesEngine(Engine):
         centres = scenario.stack.centroids
         ifaces = self.interfaces(scenario, s)
         omega = 2.0 * math.pi * s.contact_frequency
+        onset = s.damping_onset * g / omega**2
         tags = iter(range(2, 10**9))
         ops.timeSeries("Constant", 1)
         ops.pattern("Plain", 1, 1)
@@ -350,7 +434,11 @@ class OpenseesEngine(Engine):
                     block_nodes[b].append((node, x, face.z))
                 mat, mat_d = next(tags), next(tags)
                 ops.uniaxialMaterial("ENT", mat, k)
-                ops.uniaxialMaterial("ENT", mat_d, _EPS_DAMP * k)
+                if onset > 0:  # no tangent (so no dashpot) until the onset compression
+                    ops.uniaxialMaterial("ElasticBilin", mat_d, 0.0, 0.0, 1.0, 0.0,
+                                         _EPS_DAMP * k, -onset)
+                else:
+                    ops.uniaxialMaterial("ENT", mat_d, _EPS_DAMP * k)
                 if frictionless:  # (OpenSees exits the process on a zero friction model)
                     ops.element("zeroLength", next(tags), lower, upper, "-mat", mat, "-dir", 2)
                 else:  # local x along +Y (normal), local y along −X (shear)
@@ -385,6 +473,10 @@ class OpenseesEngine(Engine):
         ops.algorithm("Newton")
         if s.integrator == "hht":
             ops.integrator("HHT", float(s.alpha))
+        elif s.integrator == "generalized-alpha":
+            # OpenSees's αM, αF are 1 − α_m, 1 − α_f of Chung & Hulbert (γ, β by default)
+            rho = float(s.rho_inf)
+            ops.integrator("GeneralizedAlpha", (2.0 - rho) / (1.0 + rho), 1.0 / (1.0 + rho))
         else:
             ops.integrator("Newmark", 0.5, 0.25)
         ops.analysis("Transient")
