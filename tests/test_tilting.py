@@ -76,6 +76,16 @@ def comparisons(request):
                                  execution=ExecutionOptions(isolate=False))
 
 
+#: The 6 x 3 running-bond wall of 0.24 x 0.12 m bricks (mu = 1).
+WALL = get_scenario("wall-6x3")
+#: Its rate (1/s): twice RATE halves the cost and is quasi-static (halving it moves the
+#: onset by -0.5 % in pymunk, -0.6 % in MuJoCo; their onsets +1.1 % and +0.8 % at 0.05/s).
+WALL_RATE = 0.1
+#: Its runs stop at this multiple of the LP factor: the onset needs the developed motion
+#: (100 times the thresholds), reached by +4.3 % at 0.05/s.
+WALL_OVERSHOOT = 1.15
+
+
 def test_limit_analysis_reference_of_the_cases():
     # closed forms: b/h for the block, the parapet's lever 0.05 over 0.4 on the wall
     # edge, the column's width over its height
@@ -125,3 +135,23 @@ def test_thin_arch_opens_its_four_hinge_mechanism_at_the_lp_factor():
     assert c.mechanism_matches
     signs = tuple(c.limit.mechanism[i].rotation_sign for i in c.half.moved)
     assert c.half.rotation_sign == signs and len(set(signs)) == 2  # alternating hinges
+
+
+@pytest.mark.parametrize("engine", list(SETTINGS))
+def test_running_bond_wall_turns_its_stepped_wedge_out_at_the_coulomb_lp_factor(engine):
+    # Coulomb joints: the nine-brick wedge above the first course turns about that
+    # course's leeward corner at 11/19 (its head joints open); the associative LP's 0.992
+    # leans on friction at head joints that nothing presses. MuJoCo's soft contacts turn
+    # single leeward half bricks by the onset angle first (4 % below), so the onset is
+    # taken on the developed motion (rockbench.studies.tilting).
+    (c,) = tilting_table([WALL], engine, rate=WALL_RATE, settings=SETTINGS[engine],
+                         overshoot=WALL_OVERSHOOT, execution=ExecutionOptions(isolate=False))
+    assert c.limit.load_factor == pytest.approx(11 / 19, rel=1e-8)
+    assert c.limit.moving_blocks == (6, 9, 12, 13, 15, 16, 18, 19, 20)
+    what = (f"{engine} wall: onset α {c.run.onset_factor:.5f} at {WALL_RATE}/s, "
+            f"{c.half.onset_factor:.5f} at {WALL_RATE / 2}/s, LP {c.limit.load_factor:.5f}")
+    assert c.half.status.completed, f"{what}: {c.half.message}"
+    assert -UNDERSHOOT <= c.error <= OVERSHOOT and quasi_static(c, HALVING), what
+    assert abs(c.extrapolated_error) <= EXTRAPOLATED, what
+    assert c.mechanism_matches, f"{what}: moved {c.half.moved}"
+    assert c.half.rotation_sign == (1,) * 9, what  # one rigid rotation toward +x
