@@ -1,0 +1,354 @@
+"""LMGC90 engine plugin: non-smooth contact dynamics through ``compas_lmgc90``.
+
+LMGC90 (CNRS / Université de Montpellier, CeCILL licence) is a discrete element
+code of the *non-smooth contact dynamics* family (Moreau–Jean): rigid bodies,
+unilateral contact and Coulomb friction solved at the velocity level by
+nonlinear Gauss–Seidel (NLGS) once per time step, impacts as velocity jumps.
+Its ``IQS_CLB`` law ("inelastic quasi-shock, Coulomb") is a perfectly plastic
+impact with friction: exactly Housner's assumptions, with no contact stiffness
+or damping to calibrate. ``compas_lmgc90`` (MIT licence, alpha) is the Block
+Research Group's binding; its wheel carries LMGC90's Fortran core compiled in.
+
+Scene: every block is a convex polyhedron (its x–z profile, chamfers included,
+extruded over its depth), tilted by θ0 about its pivot; the base is a box whose
+top face is z = 0 with all six velocities driven. The binding fixes, and this
+plugin therefore cannot change: gravity (0, 0, −9.81) m/s² (a scenario with
+another ``g`` is unsupported), one contact law for every pair (the scenario's
+friction; a different interface friction is unsupported), a restitution of 0
+(``IQS_CLB``: a scenario with restitution > 0 is unsupported), the NLGS
+parameters (tolerance 1.666e-4 in the ``QM/16`` norm, relaxation 0.1, 50
+sweeps between checks, at most 25 000 sweeps per step) and the contact
+detection (``STO``: contact points where two facing polygons overlap).
+
+Face-to-face tolerance (the one thing changed behind the binding's back): STO
+pairs only faces whose normals are within ``f2f_tol`` of anti-parallel (on
+1 − cos of their angle). The binding sets 1e-3 (2.56°) and does not expose
+it, so a block tilted more than 2.56° has no contact at all and falls through
+the ground (B0 at 0.5 λ = 5.65°: measured, tested). LMGC90's own setter
+``set_f2f_tol_PRPRx`` is an exported symbol of the binding's extension module;
+the plugin calls it through ctypes after ``Solver()`` (which resets it) and
+before ``preprocess()``. A build without that symbol lists the engine as
+unavailable with the reason.
+
+Base driving: LMGC90 takes a driven velocity as an evolution table fixed before
+pre-processing, so the whole base velocity history is handed over at build: the
+exact u̇_g at every step time up to the end of the excitation, 0 afterwards
+(:meth:`_drive_base` has nothing left to do). The θ-method moves a driven
+degree of freedom by dt ((1 − θ) v_i + θ v_{i+1}): with θ = 1/2 the trapezoidal
+rule of the exact velocities (a 5 Hz / 4 mm pulse leaves the base within 2e-10 m
+of u_g at its end).
+
+Reading poses: LMGC90 reports each body's centre of inertia and its principal
+inertia frame (rows: the axes in world components); the rotation since the
+build is the frame's change, applied to the block's initial orientation.
+
+One simulation per process: LMGC90 keeps its model in Fortran module state,
+but compas_lmgc90 ≥ 0.1.11 resets all of it when a ``Solver`` is created, so
+runs in one process repeat to the bit whatever ran before (tested) and warm
+workers may be reused.
+
+Measured (compas_lmgc90 0.1.11, CPython 3.11, x86_64; ``tests/test_engine_lmgc90.py``,
+``rockbench run free-b0 --engine lmgc90 --preset accurate``): the first swing of free
+rocking is exact (B0's first impact within 0.003 %), but LMGC90's impact keeps more
+energy than Housner's: the swing after the first impact gives an effective
+η ≈ 1 − 1.42 sin²λ instead of 1 − 1.5 sin²λ, the same at Δt 0.2, 0.1 and 0.05 ms
+(B0: 0.945 against 0.942; B2: 0.716 against 0.700), so it is the impact law as
+solved here (perhaps the binding's fixed NLGS relaxation), not the step.
+``accurate`` (Δt 0.1 ms): B0 from 0.5 λ, 2nd and 3rd impacts 0.63 % and 0.39 %
+late, max |θ − θ_ref| 0.018 λ up to the 3rd impact and 0.029 λ over 20 s; B2's
+2nd and 3rd impacts 2.3 % and 2.2 % late (a known failure of the conformance
+kit's 2 % bound). ``fast`` (Δt 1 ms): B0 0.023 λ up to the 3rd impact, impacts
+within 0.53 %, 0.16 λ over 20 s.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from rockbench.engines.base import Capabilities, Engine, install_hint
+from rockbench.engines.settings import EngineSettings
+from rockbench.errors import EngineUnavailable, UnsupportedScenario
+from rockbench.scenarios import Scenario
+
+__all__ = ["Lmgc90Engine", "Lmgc90Settings", "LMGC90_GRAVITY"]
+
+#: gfortran's exported name of LMGC90's ``PRPRx.set_f2f_tol_PRPRx`` in the binding's module.
+_F2F_SYMBOL = "__prprx_MOD_set_f2f_tol_prprx"
+#: LMGC90's inelastic quasi-shock law with Coulomb friction: a perfectly plastic impact.
+#: (Its ``IQS_CLB_g0`` variant measures gaps from the initial ones: the lifted edge of a
+#: tilted block then counts as closed and the block stays at its release tilt.)
+_LAW = "IQS_CLB"
+#: Gravity the binding imposes (``set_gravity`` in its Fortran wrapper), m/s² along −z.
+LMGC90_GRAVITY = 9.81
+
+
+def _solver_module() -> Any:
+    """``compas_lmgc90.solver``, imported on first use (rule 2 of the engine contract)."""
+    return Lmgc90Engine.library("compas_lmgc90.solver")
+
+
+@dataclass(frozen=True)
+class Lmgc90Settings(EngineSettings):
+    """Knobs of the LMGC90 engine (defaults = the ``accurate`` preset).
+
+    Parameters
+    ----------
+    timestep : float
+        Time step in s (one contact detection and one NLGS solve per step).
+    theta : float
+        Parameter of LMGC90's θ-method, in [0.5, 1] (0.5, the LMGC90 default for
+        rigid bodies; 1 changes B0's impact times by < 0.02 %).
+    alert : float
+        Contact detection distance in m: points of two facing faces farther apart
+        than this carry no contact. It must exceed the gap under the lifted edge
+        while that edge may come back within one step (0.2 m: B0's lifted edge at
+        0.5 λ is 0.099 m up).
+    f2f_tol : float
+        Face-to-face tolerance of LMGC90's STO detection, on 1 − cos of the angle
+        between two faces' normals: faces further from parallel get no contact at
+        all. The binding's own 1e-3 (2.56°) loses the contact under any block
+        tilted more than that (B0 at 0.5 λ falls through the ground); 0.5 (60°)
+        keeps it up to overturning and changes nothing else measured.
+    """
+
+    timestep: float = 1e-4
+    theta: float = 0.5
+    alert: float = 0.2
+    f2f_tol: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.timestep) and self.timestep > 0):
+            raise ValueError(f"timestep must be finite and > 0, got {self.timestep!r}")
+        if not 0.5 <= self.theta <= 1.0:
+            raise ValueError(f"theta must be in [0.5, 1], got {self.theta!r}")
+        if not (math.isfinite(self.alert) and self.alert > 0):
+            raise ValueError(f"alert must be finite and > 0, got {self.alert!r}")
+        if not 0.0 < self.f2f_tol <= 1.0:
+            raise ValueError(f"f2f_tol must be in (0, 1], got {self.f2f_tol!r}")
+
+
+class Lmgc90Engine(Engine):
+    """Rocking blocks in LMGC90 (non-smooth contact dynamics) via compas_lmgc90."""
+
+    name: ClassVar[str] = "lmgc90"
+    capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
+                                                        chamfer=True)
+    Settings: ClassVar[type[EngineSettings]] = Lmgc90Settings
+    presets: ClassVar[dict[str, dict[str, Any]]] = {"accurate": {}, "fast": {"timestep": 1e-3}}
+    requires: ClassVar[tuple[str, ...]] = ("compas_lmgc90.solver",)
+    extra: ClassVar[str] = "lmgc90"
+    known_failures: ClassVar[dict[str, str]] = {
+        "free_rocking": "B2's 2nd and 3rd impacts 2.3 % and 2.2 % late at the accurate "
+                        "step (0.1 ms; 0.05 ms alike): LMGC90's impact keeps more energy "
+                        "than Housner's eta (effective 0.716 against 0.700)",
+    }
+    #: LMGC90 keeps one model per process in Fortran module state, but every new
+    #: Solver resets it (compas_lmgc90 >= 0.1.11; tested): warm workers may be reused
+    fresh_process: ClassVar[bool] = False
+
+    def __init__(self) -> None:
+        self._solver: Any = None
+        self._step: Any = None
+        self._frame0 = np.zeros((0, 3, 3))
+        self._r0 = np.zeros((0, 3, 3))
+        self._poses = np.zeros((0, 7))
+        self._last: Any = None
+        #: Where the base ended (m along x), recorded at teardown.
+        self.base_end = math.nan
+
+    @classmethod
+    def check_available(cls) -> None:
+        """The binding imports and exports LMGC90's face-to-face tolerance setter."""
+        super().check_available()
+        _f2f_tol_setter()
+
+    @classmethod
+    def version(cls) -> str:
+        """Version of compas_lmgc90 (the binding; LMGC90's core is compiled into it)."""
+        return str(cls.library("compas_lmgc90").__version__)
+
+    # ------------------------------------------------------------------ hooks
+    def _check_supported(self, scenario: Scenario) -> None:
+        if not math.isclose(scenario.g, LMGC90_GRAVITY, rel_tol=1e-12):
+            raise UnsupportedScenario(
+                f"lmgc90: compas_lmgc90 fixes gravity at {LMGC90_GRAVITY} m/s², scenario has "
+                f"g = {scenario.g:g}")
+        c = scenario.contact
+        if c.restitution != 0.0:
+            raise UnsupportedScenario(
+                "lmgc90: the IQS_CLB law is a perfectly plastic impact; scenario has "
+                f"restitution {c.restitution:g}")
+        if c.block_friction != c.friction:
+            raise UnsupportedScenario(
+                "lmgc90: compas_lmgc90 gives every contact pair one law (one friction "
+                "coefficient); scenario has a different interface friction")
+
+    def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
+        s: Lmgc90Settings = settings  # type: ignore[assignment]
+        mod = _solver_module()
+        dt = float(s.timestep)
+        exc = scenario.excitation
+        blocks = scenario.blocks
+        u_max = exc.motion_bounds(scenario.duration)[0]
+        reach = max(b.b for b in blocks) + scenario.stack.total_height + u_max
+        half = (max(1.0, 2.0 * reach), max(1.0, 2.0 * reach, max(b.depth for b in blocks)))
+        thick = 0.5
+        base = _box_polyhedron(half[0], half[1], thick, centre=(0.0, 0.0, -thick))
+
+        centroids, th0 = scenario.initial_poses()
+        angles = th0 + scenario.block_angles
+        bodies = [base]
+        rot0 = []
+        for blk, (cx, cz), th in zip(blocks, centroids, angles, strict=True):
+            r = _rot_y(float(th))
+            v, f = _prism(blk.profile(), 0.5 * blk.depth)
+            bodies.append({"vertices": (v @ r.T + (cx, 0.0, cz)).tolist(), "faces": f})
+            rot0.append(r)
+        # the base's density is irrelevant (all of its velocities are driven)
+        densities = [blocks[0].m / blocks[0].volume] + [b.m / b.volume for b in blocks]
+
+        solver = mod.Solver(dt=dt, theta=float(s.theta), density=densities[0])
+        self._solver = solver
+        solver.geometry_from_v_f(bodies, density=densities)
+        for comp in ("Vy", "Vz", "Rx", "Ry", "Rz"):
+            solver.apply_velocity(0, comp, 0.0)
+        solver.apply_velocity(0, "Vx", _velocity_table(scenario, dt) if not exc.is_free
+                              else 0.0)
+        _f2f_tol_setter()(ctypes.byref(ctypes.c_double(float(s.f2f_tol))))
+        solver.contact_law(_LAW, float(scenario.contact.friction), alert=float(s.alert))
+        solver.preprocess()
+        init = solver.lmgc90.get_initial_state()
+        self._frame0 = np.array([np.reshape(f, (3, 3)) for f in init.init_body_frames[1:]])
+        self._r0 = np.array(rot0)
+        self._step = solver.lmgc90.compute_one_step
+        self._last = init
+        self._poses = np.zeros((len(blocks), 7))
+        return dt
+
+    def _drive_base(self, t: float, dt: float) -> None:
+        # the base's velocity history is LMGC90's evolution table, set at build
+        return None
+
+    def _advance_driven(self, t0: float, n: int, dt: float) -> None:
+        self._advance(n)
+
+    def _fix_base(self) -> bool:
+        # the evolution table holds the base still after the excitation
+        return True
+
+    def _advance(self, n: int) -> None:
+        step = self._step
+        for _ in range(n):
+            last = step()
+        self._last = last
+
+    def _read_poses(self) -> np.ndarray:
+        res = self._last
+        coor = res.bodies if hasattr(res, "bodies") and len(res.bodies) else res.init_bodies
+        frames = res.body_frames if len(res.body_frames) else res.init_body_frames
+        out = self._poses
+        for i in range(out.shape[0]):
+            a = np.reshape(frames[i + 1], (3, 3))
+            # the frame's rows are the principal axes (world components): the rotation
+            # since the build, applied to the block's initial orientation
+            r = a.T @ self._frame0[i] @ self._r0[i]
+            out[i, :3] = coor[i + 1]
+            out[i, 3:] = _quaternion(r)
+        return out
+
+    def _teardown(self) -> None:
+        if self._last is not None and len(getattr(self._last, "bodies", ())):
+            self.base_end = float(self._last.bodies[0][0])
+        if self._solver is not None:
+            self._solver.finalize()
+        self._solver = self._step = self._last = None
+
+
+def _f2f_tol_setter() -> Any:
+    """LMGC90's ``set_f2f_tol_PRPRx``, exported by the binding's extension module.
+
+    The binding sets the face-to-face tolerance of its STO detection to 1e-3 in
+    ``Solver()`` and exposes no way to change it; LMGC90's own setter is an
+    exported symbol of the same shared object (gfortran's name for the module
+    procedure), called through ctypes between ``Solver()`` and ``preprocess()``.
+    """
+    binary = Lmgc90Engine.library("compas_lmgc90._lmgc90").__file__
+    try:
+        fn = getattr(ctypes.CDLL(binary), _F2F_SYMBOL)
+    except (OSError, AttributeError) as exc:
+        raise EngineUnavailable(
+            f"engine 'lmgc90' is unavailable: {binary} does not export LMGC90's "
+            f"{_F2F_SYMBOL} ({exc}), which the plugin needs to detect contact under a "
+            f"tilted block; install it with: {install_hint(Lmgc90Engine.extra, 'compas_lmgc90')}"
+        ) from exc
+    fn.argtypes, fn.restype = [ctypes.POINTER(ctypes.c_double)], None
+    return fn
+
+
+def _rot_y(th: float) -> np.ndarray:
+    """Rotation by ``th`` about +y (the top of an upright block moves toward +x)."""
+    c, s = math.cos(th), math.sin(th)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def _quaternion(r: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method)."""
+    tr = r[0, 0] + r[1, 1] + r[2, 2]
+    if tr > 0.0:
+        w = 0.5 * math.sqrt(1.0 + tr)
+        k = 0.25 / w
+        q = (w, (r[2, 1] - r[1, 2]) * k, (r[0, 2] - r[2, 0]) * k, (r[1, 0] - r[0, 1]) * k)
+    else:
+        i = int(np.argmax(np.diag(r)))
+        j, m = (i + 1) % 3, (i + 2) % 3
+        s = 2.0 * math.sqrt(max(1.0 + r[i, i] - r[j, j] - r[m, m], 0.0))
+        v = [0.0, 0.0, 0.0]
+        v[i] = 0.25 * s
+        v[j] = (r[j, i] + r[i, j]) / s
+        v[m] = (r[m, i] + r[i, m]) / s
+        q = ((r[m, j] - r[j, m]) / s, *v)
+    return np.asarray(q) / math.sqrt(sum(x * x for x in q))
+
+
+def _prism(profile: np.ndarray, half_depth: float) -> tuple[np.ndarray, list[list[int]]]:
+    """Vertices and outward faces of a convex x–z profile extruded over ±half_depth in y."""
+    k = len(profile)
+    v = np.array([(x, y, z) for x, z in profile for y in (-half_depth, half_depth)], float)
+    faces = [[2 * j, 2 * ((j + 1) % k), 2 * ((j + 1) % k) + 1, 2 * j + 1] for j in range(k)]
+    faces += [[2 * j for j in range(k)], [2 * j + 1 for j in range(k)]]
+    centre = v.mean(axis=0)
+    out = []
+    for f in faces:
+        p = v[f]
+        n = np.cross(p[1] - p[0], p[2] - p[1])
+        # LMGC90 wants every face wound outward: reverse those that face the centre
+        out.append(f if n @ (p.mean(axis=0) - centre) > 0.0 else f[::-1])
+    return v, out
+
+
+def _box_polyhedron(hx: float, hy: float, hz: float,
+                    centre: tuple[float, float, float]) -> dict[str, Any]:
+    """A box of half-sizes (hx, hy, hz) as LMGC90 vertices and outward faces."""
+    v, f = _prism(np.array([[-hx, -hz], [hx, -hz], [hx, hz], [-hx, hz]]), hy)
+    return {"vertices": (v + centre).tolist(), "faces": f}
+
+
+def _velocity_table(scenario: Scenario, dt: float) -> np.ndarray:
+    """The base velocity as an LMGC90 evolution table, shape (2, n): times, then values.
+
+    The exact u̇_g at every step time up to the end of the excitation, then 0
+    until past the end of the run (LMGC90 interpolates linearly between rows).
+    """
+    exc = scenario.excitation
+    t_end = min(exc.end_time, scenario.duration)
+    n = int(math.ceil(t_end / dt - 1e-9)) + 1
+    t = np.arange(n + 1) * dt
+    v = np.asarray(exc.velocity(t), dtype=float)
+    v[t > t_end + 1e-12] = 0.0
+    tail = max(scenario.duration, t[-1]) + 1.0
+    return np.vstack([np.append(t, tail), np.append(v, 0.0)])

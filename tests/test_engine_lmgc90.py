@@ -1,0 +1,162 @@
+"""Physics tests of the LMGC90 engine plugin (compas_lmgc90) against Housner and closed forms."""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import numpy as np
+import pytest
+from engine_helpers import B0_IMPACTS, SINGLE2, check_base_follows_excitation, check_sine_pulse_peak
+
+from rockbench.analytic.housner import single_block_reference
+from rockbench.engines.lmgc90_engine import Lmgc90Engine, Lmgc90Settings, _velocity_table
+from rockbench.engines.settings import SettingsError
+from rockbench.errors import EngineUnavailable
+from rockbench.metrics import impact_times
+from rockbench.scenarios import Block, Contact, Scenario, SinePulse, get_scenario
+from rockbench.trajectory import Status, Trajectory
+
+
+def test_unavailable_without_the_binding(monkeypatch: pytest.MonkeyPatch) -> None:
+    # without compas_lmgc90 the engine is unavailable with the install hint
+    monkeypatch.setitem(sys.modules, "compas_lmgc90.solver", None)
+    with pytest.raises(EngineUnavailable, match=r"rockbench\[lmgc90\]"):
+        Lmgc90Engine.check_available()
+
+
+def test_presets_and_knobs() -> None:
+    assert Lmgc90Engine.requires == ("compas_lmgc90.solver",)
+    assert Lmgc90Engine.extra == "lmgc90"
+    assert Lmgc90Engine.settings("accurate") == Lmgc90Settings()
+    assert Lmgc90Engine.settings("fast").timestep == pytest.approx(1e-3)
+    for bad in ({"timestep": 0.0}, {"theta": 0.4}, {"theta": 1.5}, {"alert": -1.0},
+                {"f2f_tol": 0.0}, {"f2f_tol": 1.5}, {"law": "IQS_CLB"}):
+        with pytest.raises(SettingsError):
+            Lmgc90Engine.settings(**bad)
+
+
+def _unavailable() -> str | None:
+    """Why the engine cannot run here (the registry's reason), or None."""
+    try:
+        Lmgc90Engine.check_available()
+    except EngineUnavailable as exc:
+        return str(exc)
+    return None
+
+
+_WHY = _unavailable()
+needs_lmgc90 = pytest.mark.skipif(_WHY is not None, reason=_WHY or "")
+
+
+@pytest.fixture(scope="module")
+def engine() -> Lmgc90Engine:
+    return Lmgc90Engine()
+
+
+@pytest.fixture(scope="module")
+def b0_accurate(engine: Lmgc90Engine) -> Trajectory:
+    """B0 released at 0.5 λ, 3.6 s (three impacts) at the accurate preset."""
+    return engine.simulate(get_scenario("free-b0").replace(duration=3.6), "accurate")
+
+
+@needs_lmgc90
+def test_free_rocking_b0_accurate(b0_accurate: Trajectory) -> None:
+    tr = b0_accurate
+    sc = get_scenario("free-b0").replace(duration=3.6)
+    ref = single_block_reference(sc)
+    assert tr.status is Status.OK
+    lam = sc.critical_angle
+    # θ starts at the requested tilt, pivoting on the +x corner (centroid toward +x)
+    assert tr.theta[0, 0] == pytest.approx(sc.theta0, rel=1e-9) and tr.x[0, 0] > 0
+    # the first swing is exact (a rigid block on a rigid pivot, no contact stiffness) ...
+    imp = impact_times(tr)
+    assert imp[0] == pytest.approx(B0_IMPACTS[0], rel=2e-4)
+    # ... and LMGC90's inelastic impact keeps a little more than Housner's η: measured
+    # (Δt 0.1 and 0.2 ms alike) the 2nd and 3rd impacts 0.63 % and 0.39 % late,
+    # max |θ − θ_ref| 0.018 λ up to the 3rd impact
+    np.testing.assert_allclose(imp[:3], B0_IMPACTS, rtol=1e-2)
+    assert np.all(imp[1:3] > B0_IMPACTS[1:3])
+    err = np.max(np.abs(tr.theta[:, 0] - ref.theta[:, 0])) / lam
+    assert err <= 0.025
+    # no energy gain: never higher than the release, the block stays in its plane
+    assert np.max(np.abs(tr.theta[:, 0])) <= sc.theta0 * (1 + 1e-6)
+    assert np.max(tr.wobble) < 1e-3
+
+
+@needs_lmgc90
+@pytest.mark.xfail(strict=True, reason="measured: LMGC90's impact dissipates less than "
+                   "Housner's eta on B0 (2nd impact 0.63 % late at dt 0.1 and 0.2 ms alike)")
+def test_b0_impact_times_within_half_percent(b0_accurate: Trajectory) -> None:
+    np.testing.assert_allclose(impact_times(b0_accurate)[:3], B0_IMPACTS, rtol=5e-3)
+
+
+@needs_lmgc90
+def test_binding_face_to_face_tolerance_loses_tilted_contact(engine: Lmgc90Engine) -> None:
+    # the binding's own STO face-to-face tolerance (1e-3 on 1 − cos of the faces' angle,
+    # 2.56°) finds no contact under a block tilted 0.5 λ = 5.65°: it falls through the
+    # ground in free fall (2.5 m in 0.71 s); the plugin's default tolerance holds it
+    sc = get_scenario("free-b0").replace(duration=0.8)
+    lost = engine.simulate(sc, {"preset": "fast", "f2f_tol": 1e-3})
+    z0 = lost.z[0, 0]
+    np.testing.assert_allclose(z0 - lost.z[:, 0], 0.5 * sc.g * lost.t**2, rtol=1e-2, atol=1e-6)
+    np.testing.assert_allclose(lost.theta[:, 0], sc.theta0, rtol=1e-9)
+    kept = engine.simulate(sc, "fast")
+    assert kept.status is Status.OK
+    assert float(np.min(kept.z[:, 0])) > 0.99 * sc.blocks[0].h
+
+
+@needs_lmgc90
+def test_sine_pulse_peak_accurate(engine: Lmgc90Engine) -> None:
+    check_sine_pulse_peak(engine, "accurate")
+
+
+@needs_lmgc90
+def test_base_follows_excitation(engine: Lmgc90Engine) -> None:
+    # the base's velocity table is the exact u̇_g at every step: the trapezoidal
+    # positions end where the excitation left the base (measured 2e-10 m)
+    check_base_follows_excitation(engine, "fast", abs_tol=1e-6)
+    # and friction drags a squat block below the uplift threshold along with it
+    sc = Scenario("ride", Block(1.0, 0.5, 0.5, mass=10.0), excitation=SinePulse(2.0, 0.002),
+                  duration=1.0)
+    tr = engine.simulate(sc, "fast")
+    assert tr.status is Status.OK
+    assert np.max(np.abs(tr.theta)) < 1e-6
+    np.testing.assert_allclose(tr.x[:, 0], sc.excitation.displacement(tr.t), atol=1e-5)
+
+
+@needs_lmgc90
+def test_runs_in_one_process_are_identical(engine: Lmgc90Engine) -> None:
+    # LMGC90's Fortran state is reset by every new Solver (compas_lmgc90 >= 0.1.11): a run
+    # after another scenario in the same process repeats the first to the bit
+    sc = Scenario("pulse", SINGLE2, excitation=SinePulse(3.3, 0.008), duration=0.8)
+    first = engine.simulate(sc, "fast")
+    engine.simulate(get_scenario("free-b0").replace(duration=0.3), "fast")
+    again = Lmgc90Engine().simulate(sc, "fast")
+    assert first.status is Status.OK
+    np.testing.assert_array_equal(again.theta, first.theta)
+
+
+@needs_lmgc90
+@pytest.mark.parametrize(("change", "why"), [
+    ({"g": 9.0}, "gravity"),
+    ({"contact": Contact(friction=1.0, restitution=0.5)}, "restitution"),
+])
+def test_unsupported(engine: Lmgc90Engine, change: dict, why: str) -> None:
+    sc = get_scenario("free-b0").replace(duration=0.1, **change)
+    tr = engine.simulate(sc, "fast")
+    assert tr.status is Status.UNSUPPORTED and why in tr.message
+
+
+def test_velocity_table_is_the_exact_base_velocity() -> None:
+    exc = SinePulse(5.0, 0.004)  # ends at 0.2 s
+    sc = Scenario("pulse", SINGLE2, excitation=exc, duration=0.5)
+    table = _velocity_table(sc, 1e-3)
+    t, v = table
+    assert np.all(np.diff(t) > 0) and t[-1] > sc.duration
+    during = t <= exc.end_time
+    np.testing.assert_allclose(v[during], exc.velocity(t[during]), rtol=0, atol=1e-15)
+    assert np.all(v[~during] == 0.0)
+    # the trapezoidal rule of the table moves the base by the pulse's displacement
+    u_end = float(np.sum(0.5 * (v[1:] + v[:-1]) * np.diff(t)))
+    assert u_end == pytest.approx(2 * math.pi * 0.004, rel=1e-5)
