@@ -15,15 +15,18 @@ from rockbench.cli import main
 from rockbench.engines import get_engine
 from rockbench.report.assembly_report import _MOVING, draw_assembly, write_assembly_report
 from rockbench.runner import ExecutionOptions
-from rockbench.scenarios import Block, Scenario, get_scenario
+from rockbench.scenarios import Block, Contact, Scenario, get_scenario
 from rockbench.studies.collapse import (
+    RESIDUAL_DISPLACEMENT,
+    RESIDUAL_DROP,
     collapsed,
+    outcome,
     pulse_scenario,
     pulse_to_collapse,
     static_factor,
 )
 from rockbench.studies.tilting import reference, tilting_table
-from rockbench.trajectory import Status
+from rockbench.trajectory import Status, Trajectory
 
 HERE = ExecutionOptions(isolate=False)
 #: A slender block: b/h = 0.2, the static factor tan λ = 0.2.
@@ -50,6 +53,58 @@ def test_a_slow_pulse_collapses_a_block_just_above_g_tan_lambda(engine, settings
     assert float(np.max(np.abs(rest.theta))) < 1e-3 * SLENDER.critical_angle
     over = eng.simulate(above, settings)
     assert over.status is Status.OVERTURNED and collapsed(over, above) is True
+
+
+#: A squat block on a low-friction base: b/h = 2 > μ = 0.3, so it slides at α = μ.
+SQUAT = Scenario(name="squat", stack=Block(1.0, 0.2, 0.5, mass=1.0),
+                 contact=Contact(friction=0.3))
+
+
+def _end_state(scenario: Scenario, dtheta, dx, dz) -> Trajectory:
+    """Rest, then every block moved by (dθ, dx, dz) relative to the base at the end."""
+    t = np.array([0.0, scenario.duration])
+    x0, z0 = (np.array([p[i] for p in scenario.stack.poses]) for i in (0, 1))
+    u = float(np.asarray(scenario.excitation.displacement(t[-1])))
+    return Trajectory(t, np.vstack([np.zeros(2), dtheta]),
+                      np.vstack([x0, x0 + u + np.asarray(dx)]),
+                      np.vstack([z0, z0 + np.asarray(dz)]))
+
+
+def test_outcome_tells_sliding_from_collapse():
+    sc = pulse_scenario(PARAPET, 1.0, 2.0, 0.125)
+    lam, (wall, top) = sc.critical_angle, sc.blocks
+    far = 2 * RESIDUAL_DISPLACEMENT * wall.height
+    cases = {
+        "rest": ([0.0, 0.0], [0.0, 0.0], [0.0, 0.0]),
+        # the whole assembly (or a block on another) translated: slid, not collapsed
+        "sliding": ([0.0, 0.0], [far, far], [0.0, 0.0]),
+        # the parapet turned past λ, or fallen off the wall by half its height
+        "collapse": ([0.0, 1.5 * lam], [0.0, 0.0], [0.0, 0.0]),
+    }
+    for expected, state in cases.items():
+        assert outcome(_end_state(sc, *state), sc) == expected
+        assert collapsed(_end_state(sc, *state), sc) is (expected == "collapse")
+    fell = _end_state(sc, [0.0, 0.0], [0.0, far], [0.0, -2 * RESIDUAL_DROP * top.height])
+    assert outcome(fell, sc) == "collapse"
+    assert outcome(Trajectory(np.array([0.0, 1.0]), np.zeros((2, 2)), status=Status.CRASHED),
+                   sc) is None
+
+
+def test_a_squat_block_sliding_on_the_base_has_not_collapsed():
+    # 3 and 6 times the sliding factor μ = 0.3 at 0.5 Hz: the block slides more than a
+    # quarter of its width on the base without rocking (1.5 times: less); the bisection
+    # finds no collapse up to 6, and says where it slid
+    assert static_factor(SQUAT) == pytest.approx(0.3, rel=1e-7)
+    study = pulse_to_collapse([SQUAT], ["pymunk"], [0.5], settings={"pymunk": PYMUNK},
+                              rtol=0.05, max_factor=6.0, execution=HERE)
+    (p,) = study.points
+    assert math.isinf(p.upper) and p.lower == 6.0 and p.sliding_factor == 3.0
+    assert [(q.factor, q.slid, q.collapsed) for q in p.probes] == [
+        (1.5, False, False), (3.0, True, False), (6.0, True, False)]
+    sc = pulse_scenario(SQUAT, 0.5, 3.0, 0.3)
+    run = get_engine("pymunk").simulate(sc, PYMUNK)
+    assert float(np.max(np.abs(run.theta))) < 0.01 * sc.critical_angle
+    assert abs(run.x[-1, 0] - run.x[0, 0] - float(sc.excitation.displacement(run.t[-1]))) > 0.25
 
 
 @pytest.fixture(scope="module")

@@ -48,6 +48,7 @@ from rockbench.scenarios.assembly import Assembly
 from rockbench.studies.collapse import (
     FREE_TIME,
     RESIDUAL_DISPLACEMENT,
+    RESIDUAL_DROP,
     RESIDUAL_ROTATION,
     CollapsePoint,
     CollapseStudy,
@@ -367,10 +368,12 @@ def write_assembly_report(out: Path, scenarios: Sequence[Scenario],
     if tilting:
         sections.append(Section("tilting", "Tilting table", [
             "Each engine tilts the table through a base-acceleration ramp α(t) = rate · t at "
-            "two rates (the second half the first) and records the α at which a block first "
-            "leaves its rest pose (rockbench.studies.tilting); the error is that onset at the "
-            "slower rate against the static factor of limit analysis. The onset lags the "
-            "threshold by ∝ rate^(2/3), which the extrapolated column removes."],
+            "two rates (the second half the first) and records the α at which the assembly "
+            "starts to move relative to the base (its developed motion extrapolated back to "
+            "the onset thresholds, rockbench.studies.tilting); the error is that onset at the "
+            "slower rate against the static factor of limit analysis with real "
+            "(non-associative) Coulomb joints. The onset lags the threshold by ∝ rate^(2/3), "
+            "which the extrapolated column removes."],
             [_tilting_table(tilting)]))
     if collapse is not None:
         sec = Section("collapse", "Pulse to collapse", [
@@ -379,8 +382,11 @@ def write_assembly_report(out: Path, scenarios: Sequence[Scenario],
             f"(tolerance {100 * collapse.rtol:g} %; rockbench.studies.collapse). A run "
             "collapses if a block overturns, or if at the end of the run (the pulse plus "
             f"{FREE_TIME:g} s of still base) a block stays turned by more than "
-            f"{RESIDUAL_ROTATION:g} λ or displaced relative to the base by more than "
-            f"{RESIDUAL_DISPLACEMENT:g} of its size. There is no analytic dynamic reference "
+            f"{RESIDUAL_ROTATION:g} λ or lower than at rest by more than {RESIDUAL_DROP:g} of "
+            "its height; blocks that only translated (by more than "
+            f"{RESIDUAL_DISPLACEMENT:g} of their size relative to the base, e.g. a wall "
+            "sliding on the base) slid, which is not collapse. There is no analytic dynamic "
+            "reference "
             "for a multi-block assembly: the figures show the engines' spread and the "
             "static factor α, the low-frequency limit."], [_collapse_table(collapse)])
         for sc in scenarios:

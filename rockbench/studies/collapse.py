@@ -10,21 +10,29 @@ limit (a_p/g → α as ω_p → 0: a pulse that lasts long enough is a slow tilt
 
 Collapse criterion
 ------------------
-A run *collapses* (:func:`collapsed`) if the engine reports a block
-overturned (``Status.OVERTURNED``: a block turned past half a turn from its
-rest orientation or thrown out of the scene), or if at the end of the run, the
-pulse plus :data:`FREE_TIME` seconds of still base, some block is
+A run ends in one of three outcomes (:func:`outcome`). It *collapses* if the
+engine reports a block overturned (``Status.OVERTURNED``: a block turned past
+half a turn from its rest orientation or thrown out of the scene), or if at the
+end of the run, the pulse plus :data:`FREE_TIME` seconds of still base, some
+block is
 
 * turned from its rest orientation by more than :data:`RESIDUAL_ROTATION`
   times the assembly's critical angle λ = atan α (a block that rocked comes
   back to its seat; one that stays turned has lost it, e.g. a fallen
   voussoir or a drum lying on its neighbour), or
-* displaced relative to the base by more than :data:`RESIDUAL_DISPLACEMENT`
-  of its size (it slid or fell off the assembly).
+* lower than at rest by more than :data:`RESIDUAL_DROP` of its height (it
+  fell off the assembly).
 
-A run that failed (crash, instability, time-out) is neither: its probe is kept
-with ``failed`` and the bracket is not moved by it (the point is then marked
-unresolved).
+It *slid* if no block did either but some block is displaced relative to the
+base by more than :data:`RESIDUAL_DISPLACEMENT` of its size: blocks that
+translate without turning or falling (a squat block, or a whole wall, sliding
+on the base, a course slipping on the one below) have not collapsed; the
+smallest pulse that slid is reported (:attr:`CollapsePoint.sliding_factor`)
+and the bisection goes on above it. Otherwise the run is at *rest*.
+
+A run that failed (crash, instability, time-out) is none of these: its probe is
+kept with ``failed`` and the bracket is not moved by it (the point is then
+marked unresolved).
 
 Bisection
 ---------
@@ -49,7 +57,7 @@ import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -61,15 +69,22 @@ from rockbench.studies.recording import finish_run
 from rockbench.studies.tilting import reference
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["FREE_TIME", "RESIDUAL_ROTATION", "RESIDUAL_DISPLACEMENT", "FIRST_FACTOR", "GROWTH",
-           "KIND", "CollapseProbe", "CollapsePoint", "CollapseStudy", "static_factor",
-           "collapsed", "pulse_scenario", "pulse_to_collapse"]
+__all__ = ["FREE_TIME", "RESIDUAL_ROTATION", "RESIDUAL_DROP", "RESIDUAL_DISPLACEMENT",
+           "FIRST_FACTOR", "GROWTH", "KIND", "Outcome", "CollapseProbe", "CollapsePoint",
+           "CollapseStudy", "static_factor", "outcome", "collapsed", "pulse_scenario",
+           "pulse_to_collapse"]
+
+#: How a pulse-to-collapse run ended (module docstring).
+Outcome = Literal["rest", "collapse", "sliding"]
 
 #: Seconds of still base after the pulse before the end state is judged.
 FREE_TIME = 2.0
 #: A block still turned by more than this many critical angles at the end has collapsed.
 RESIDUAL_ROTATION = 1.0
-#: A block displaced relative to the base by more than this fraction of its size has.
+#: A block lower than at rest by more than this fraction of its height has fallen.
+RESIDUAL_DROP = 0.25
+#: A block displaced relative to the base by more than this fraction of its size has
+#: slid (collapse only if it also turned or fell).
 RESIDUAL_DISPLACEMENT = 0.25
 #: First upper probe, in units of the static factor.
 FIRST_FACTOR = 1.5
@@ -104,19 +119,28 @@ def pulse_scenario(scenario: Scenario, frequency: float, factor: float, alpha: f
         duration=1.0 / frequency + free_time, output_rate=_OUTPUT_RATE, initial_tilt=0.0)
 
 
-def collapsed(traj: Trajectory, scenario: Scenario) -> bool | None:
-    """The collapse criterion of the module docstring; None for a failed run."""
+def outcome(traj: Trajectory, scenario: Scenario) -> Outcome | None:
+    """The outcome of a run by the criterion of the module docstring; None for a failed run."""
     if traj.status is Status.OVERTURNED:
-        return True
+        return "collapse"
     if not traj.status.completed or traj.t.size < 2:
         return None
-    lam = scenario.critical_angle
     turn = np.abs(traj.theta[-1] - traj.theta[0])
+    drop = traj.z[0] - traj.z[-1]
+    heights = np.array([b.height for b in scenario.blocks])
+    if np.any(turn > RESIDUAL_ROTATION * scenario.critical_angle) or np.any(
+            drop > RESIDUAL_DROP * heights):
+        return "collapse"
     u = float(np.asarray(scenario.excitation.displacement(traj.t[-1])))
     disp = np.hypot(traj.x[-1] - traj.x[0] - u, traj.z[-1] - traj.z[0])
     sizes = np.array([max(b.width, b.height) for b in scenario.blocks])
-    return bool(np.any(turn > RESIDUAL_ROTATION * lam)
-                or np.any(disp > RESIDUAL_DISPLACEMENT * sizes))
+    return "sliding" if np.any(disp > RESIDUAL_DISPLACEMENT * sizes) else "rest"
+
+
+def collapsed(traj: Trajectory, scenario: Scenario) -> bool | None:
+    """True if the run collapsed (:func:`outcome`; sliding is not collapse), None if it failed."""
+    result = outcome(traj, scenario)
+    return None if result is None else result == "collapse"
 
 
 @dataclass(frozen=True)
@@ -133,6 +157,8 @@ class CollapseProbe:
         The run's status.
     cpu_time, wall_time : float
         Its cost (s).
+    slid : bool
+        The run slid (:func:`outcome`): blocks displaced, none turned or fallen.
     """
 
     factor: float
@@ -140,6 +166,7 @@ class CollapseProbe:
     status: Status
     cpu_time: float
     wall_time: float
+    slid: bool = False
 
 
 @dataclass(frozen=True)
@@ -176,6 +203,11 @@ class CollapsePoint:
     def factor(self) -> float:
         """a_p / (α g) of the collapse: the smallest amplitude seen to collapse."""
         return self.upper
+
+    @property
+    def sliding_factor(self) -> float:
+        """a_p / (α g) of the smallest pulse that slid without collapsing (inf: none did)."""
+        return min((p.factor for p in self.probes if p.slid), default=math.inf)
 
     @property
     def acceleration_ratio(self) -> float:
@@ -346,10 +378,11 @@ def pulse_to_collapse(scenarios: Sequence[Scenario], engines: Sequence[str],
 
         trajs = run_jobs(jobs, execution, on_result=finished)
         for (c, f), job, traj in zip(batch, jobs, trajs, strict=True):
-            verdict = collapsed(traj, job.scenario)
+            result = outcome(traj, job.scenario)
+            verdict = None if result is None else result == "collapse"
             c.probes.append(CollapseProbe(
                 f, verdict, traj.status, float(traj.cpu_time),
-                float(traj.wall_time)))
+                float(traj.wall_time), slid=result == "sliding"))
             c.update(f, verdict, growth)
     points = tuple(CollapsePoint(c.engine, c.scenario.name, c.frequency, c.alpha, c.lower,
                                  c.upper, tuple(c.probes)) for c in cells)
