@@ -7,6 +7,18 @@ of the two bodies' coefficients equal the scenario's values. Each run owns a
 DIRECT-mode client (``pybullet.connect(pybullet.DIRECT)``), disconnected in
 ``_teardown``.
 
+Assemblies (:class:`~rockbench.scenarios.assembly.Assembly`): rectangular blocks are
+boxes, convex prisms convex hulls (shrunk by the collision margin, like chamfered
+blocks), each at its pose; a fixed support is one more body of the ground's kind
+(static, or a fixed-base multibody driven with the ground's velocity), a box when it
+is an axis-aligned rectangle, else a hull, twice the deepest block in depth. A
+prism's x–z product of inertia is not zero, and Bullet takes principal moments
+only: its body frame is the principal frame, turned by φ about y from the block's,
+and the poses read back are turned by −φ. Every block gets sqrt(μ_if) and the
+ground and supports μ / sqrt(μ_if), so that each pair's product is the scenario's
+(a block touches blocks and the base at once, so the alternation of stacks cannot
+be used).
+
 Measured pitfalls this module works around (see docs/engine-notes.md):
 
 * Bullet combines friction and restitution of two bodies as a product, so each
@@ -41,7 +53,8 @@ import numpy as np
 from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.settings import EngineSettings
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import Scenario
+from rockbench.scenarios import Block, Scenario
+from rockbench.scenarios.assembly import Support, rotate
 
 __all__ = ["BulletEngine", "BulletSettings"]
 
@@ -184,7 +197,7 @@ class BulletEngine(Engine):
 
     name: ClassVar[str] = "bullet"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
-                                                         chamfer=True)
+                                                         chamfer=True, assemblies=True)
     Settings: ClassVar[type[EngineSettings]] = BulletSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         # 0.1 ms steps (fps 1000 × 10 sub-steps): ≤ 5e-3 λ on the free-rocking catalog;
@@ -196,6 +209,20 @@ class BulletEngine(Engine):
     }
     requires: ClassVar[tuple[str, ...]] = ("pybullet",)
     extra: ClassVar[str] = "bullet"
+    known_failures: ClassVar[dict[str, str]] = {
+        "assembly_rest": (
+            "arch-rest (9 voussoirs, t/R = 0.2, accurate preset): Bullet's convex-hull "
+            "contacts (GJK) add one manifold point per step, so every voussoir joint is a "
+            "hinge for the first steps (4 points after ~100) and the arch settles by up to "
+            "6.1e-4 rad = 2.09e-3 λ (limit 2e-3 λ), then holds; the box assemblies turn by "
+            "< 3e-7 λ"),
+        "assembly_penetration": (
+            "arch-rest: the settled voussoirs' x–z sections overlap by 4.65e-5 m (limit "
+            "2.2e-5 m; 3.0–5.0e-5 m with collision margins 0 to 1e-3 m or the Dantzig "
+            "solver) while Bullet's own closest-point distances stay above -1.3e-7 m: its "
+            "hull manifolds, not symmetric in depth, also twist the voussoirs out of plane "
+            "by up to 2.7e-4 rad; the box assemblies overlap by < 2e-8 m"),
+    }
 
     def __init__(self) -> None:
         self._cid: int | None = None
@@ -211,13 +238,21 @@ class BulletEngine(Engine):
             return str(pb.getAPIVersion())
 
     # ------------------------------------------------------------------ hooks
+    def _check_supported(self, scenario: Scenario) -> None:
+        c = scenario.contact
+        if scenario.is_assembly and c.block_friction == 0.0 < c.friction:
+            raise UnsupportedScenario(
+                "bullet multiplies the two bodies' friction coefficients: frictionless "
+                "block-block joints with friction on the base cannot both hold in an "
+                "assembly, whose blocks touch each other and the base")
+
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
         s: BulletSettings = settings  # type: ignore[assignment]
         if s.collision_shape == "mesh" and scenario.n_blocks > 1:
             # settings are not visible to _check_supported, hence here
             raise UnsupportedScenario(
-                "bullet: collision_shape='mesh' cannot model stacks (Bullet does not "
-                "collide two concave triangle meshes)")
+                "bullet: collision_shape='mesh' cannot model stacks or assemblies of several "
+                "blocks (Bullet does not collide two concave triangle meshes)")
         out_dt = 1.0 / scenario.output_rate
         if s.dt <= out_dt * (1.0 + 1e-9):
             # a whole number of steps per output interval lets steps be batched
@@ -256,7 +291,10 @@ class BulletEngine(Engine):
         blocks = scenario.blocks
         height = scenario.stack.total_height
         exc = scenario.excitation
-        reach = max(b.b for b in blocks) + height + exc.motion_bounds(scenario.duration)[0]
+        reach = max(0.5 * b.width for b in blocks) + height \
+            + exc.motion_bounds(scenario.duration)[0]
+        if scenario.is_assembly:  # wide scenes: the blocks' spread along x too
+            reach += scenario.stack.reach + scenario.stack.size
         ground_half = (max(1.0, 2.0 * reach), max(1.0, 2.0 * reach, max(b.depth for b in blocks)),
                        0.5)
         self._ground_z = -ground_half[2]
@@ -268,21 +306,44 @@ class BulletEngine(Engine):
         self._ground = pb.createMultiBody(0.0, gshape, basePosition=(0.0, 0.0, self._ground_z),
                                           useMaximalCoordinates=ground_maximal, **kw)
 
-        mus = product_frictions(scenario.contact.friction, scenario.contact.block_friction,
-                                scenario.n_blocks)
-        e = scenario.contact.restitution if s.restitution is None else s.restitution
+        c = scenario.contact
+        if scenario.is_assembly:
+            mus = assembly_frictions(c.friction, c.block_friction, scenario.n_blocks)
+        else:
+            mus = product_frictions(c.friction, c.block_friction, scenario.n_blocks)
+        e = c.restitution if s.restitution is None else s.restitution
         rest = math.sqrt(e)
         self._set_dynamics(self._ground, mus[0], rest, None)
+        # an assembly's supports: bodies of the ground's kind at their place on the base
+        depth = max(b.depth for b in blocks)
+        self._supports: list[tuple[int, float, float]] = []
+        for sup in getattr(scenario.stack, "supports", ()):
+            shape, (px, pz) = self._support_shape(sup, depth)
+            body = pb.createMultiBody(0.0, shape, basePosition=(px, 0.0, pz),
+                                      useMaximalCoordinates=ground_maximal, **kw)
+            self._set_dynamics(body, mus[0], rest, None, margin=self._hull_margin)
+            self._supports.append((body, px, pz))
 
         centroids, th0 = scenario.initial_poses()
-        quat = (0.0, math.sin(0.5 * th0), 0.0, math.cos(0.5 * th0))
         self._bodies: list[int] = []
-        for blk, (cx, cz), mu in zip(blocks, centroids, mus[1:], strict=True):
-            shape = self._block_shape(blk, s)
+        # (block index, cos φ/2, sin φ/2) of the bodies whose frame is turned by φ from
+        # the block's (prisms: their principal frame)
+        self._turns: list[tuple[int, float, float]] = []
+        for i, (blk, (cx, cz), th, mu) in enumerate(zip(
+                blocks, centroids, th0 + scenario.block_angles, mus[1:], strict=True)):
+            if isinstance(blk, Block):
+                phi, inertia = 0.0, tuple(float(j) for j in blk.inertia)
+            else:
+                phi, inertia = principal_frame(blk.inertia_tensor)
+                if phi != 0.0:
+                    self._turns.append((i, math.cos(0.5 * phi), math.sin(0.5 * phi)))
+            a = th + phi
+            shape = self._block_shape(blk, s, phi)
             body = pb.createMultiBody(blk.m, shape, basePosition=(float(cx), 0.0, float(cz)),
-                                      baseOrientation=quat,
+                                      baseOrientation=(0.0, math.sin(0.5 * a), 0.0,
+                                                       math.cos(0.5 * a)),
                                       useMaximalCoordinates=s.maximal_coordinates, **kw)
-            self._set_dynamics(body, mu, rest, blk)
+            self._set_dynamics(body, mu, rest, blk, inertia=inertia)
             self._bodies.append(body)
         self._poses = np.empty((len(blocks), 7))
 
@@ -299,7 +360,8 @@ class BulletEngine(Engine):
             self._u_end = float(exc.displacement(end))
         return dt
 
-    def _block_shape(self, blk: Any, s: BulletSettings) -> int:
+    def _block_shape(self, blk: Any, s: BulletSettings, phi: float = 0.0) -> int:
+        """Collision shape of a block in its body frame (turned by ``phi`` from the block's)."""
         pb, kw = self._pb, self._kw
         hy = 0.5 * blk.depth
         if self._is_box(blk):
@@ -312,6 +374,8 @@ class BulletEngine(Engine):
             # prism by it so that the swept shape has the block's faces exactly
             m = self._hull_margin
             prof = _offset_polygon(blk.profile(), m)
+            if phi != 0.0:
+                prof = rotate(prof, -phi)
             yy = hy - m
             verts = [(float(x), y, float(z)) for x, z in prof for y in (-yy, yy)]
             if s.collision_shape == "mesh":
@@ -324,20 +388,43 @@ class BulletEngine(Engine):
             raise RuntimeError("pybullet could not create the block collision shape")
         return shape
 
+    def _support_shape(self, sup: Support, depth: float) -> tuple[int, tuple[float, float]]:
+        """Collision shape of a fixed support and its body's position (x, z) on the base."""
+        pb, kw = self._pb, self._kw
+        v = sup.array
+        lo, hi = v.min(axis=0), v.max(axis=0)
+        if len(v) == 4 and all(len(set(col)) == 2 for col in v.T.tolist()):
+            # an axis-aligned rectangle: a box, which Bullet's box-box routine collides
+            # with box blocks exactly (four corner points per face)
+            half = (0.5 * float(hi[0] - lo[0]), depth, 0.5 * float(hi[1] - lo[1]))
+            shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, **kw)
+            pos = (0.5 * float(lo[0] + hi[0]), 0.5 * float(lo[1] + hi[1]))
+        else:  # a hull in world coordinates, shrunk by the margin Bullet inflates it by
+            prof = _offset_polygon(v, self._hull_margin)
+            verts = [(float(x), y, float(z)) for x, z in prof for y in (-depth, depth)]
+            shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=verts, **kw)
+            pos = (0.0, 0.0)
+        if shape < 0:  # pragma: no cover - pybullet signals failure by -1
+            raise RuntimeError("pybullet could not create a support's collision shape")
+        return shape, pos
+
     def _is_box(self, blk: Any) -> bool:
-        return self._shape == "box" and blk.chamfer == 0.0
+        return self._shape == "box" and isinstance(blk, Block) and blk.chamfer == 0.0
 
     def _narrow(self, blk: Any) -> bool:
-        return self._chamfer_shape == "narrow_box" and blk.chamfer > 0.0 \
-            and self._shape != "mesh"
+        return self._chamfer_shape == "narrow_box" and isinstance(blk, Block) \
+            and blk.chamfer > 0.0 and self._shape != "mesh"
 
-    def _set_dynamics(self, body: int, mu: float, rest: float, blk: Any) -> None:
+    def _set_dynamics(self, body: int, mu: float, rest: float, blk: Any,
+                      inertia: tuple[float, ...] = (), margin: float | None = None) -> None:
+        """Contact coefficients, no damping, no sleeping; a block's mass, ``inertia``
+        (principal moments in its body frame) and margin; a support's ``margin``."""
         pb, kw = self._pb, self._kw
-        extra: dict[str, Any] = {}
+        extra: dict[str, Any] = {} if margin is None else {"collisionMargin": margin}
         if blk is not None:
             # box inertia (chamfer corners neglected, as the analytic models do);
             # the mass must be repeated or maximal-coordinate bodies lose it
-            extra = {"mass": blk.m, "localInertiaDiagonal": tuple(float(i) for i in blk.inertia)}
+            extra = {"mass": blk.m, "localInertiaDiagonal": inertia}
             if self._anchor:
                 extra["frictionAnchor"] = 1
             boxed = self._is_box(blk) or self._narrow(blk)
@@ -355,9 +442,17 @@ class BulletEngine(Engine):
             u, v = self._u[i], self._v[i]
         else:  # beyond the precomputed window (should not happen): hold still
             u, v = self._u_end, 0.0
+        self._place_base(u, v)
+
+    def _place_base(self, u: float, v: float) -> None:
+        """Put the ground (and the supports) at displacement ``u`` with velocity ``v``."""
         pb, g, cid = self._pb, self._ground, self._cid
         pb.resetBasePositionAndOrientation(g, (u, 0.0, self._ground_z), (0.0, 0.0, 0.0, 1.0), cid)
         pb.resetBaseVelocity(g, (v, 0.0, 0.0), (0.0, 0.0, 0.0), cid)
+        for body, px, pz in self._supports:
+            pb.resetBasePositionAndOrientation(body, (u + px, 0.0, pz), (0.0, 0.0, 0.0, 1.0),
+                                               cid)
+            pb.resetBaseVelocity(body, (v, 0.0, 0.0), (0.0, 0.0, 0.0), cid)
 
     def _advance_driven(self, t0: float, n: int, dt: float) -> None:
         # _drive_base + _advance(1) per step in one loop over local names, except that the
@@ -374,6 +469,15 @@ class BulletEngine(Engine):
             pb.setPhysicsEngineParameter(fixedTimeStep=self._dt, numSubSteps=0, **self._kw)
             self._substeps = 0
         reset_vel, step, zero = pb.resetBaseVelocity, pb.stepSimulation, (0.0, 0.0, 0.0)
+        if self._supports:  # the supports move with the ground
+            self._place_base(self._u[i0], self._v[i0])
+            bases = [g] + [body for body, _, _ in self._supports]
+            for v in self._v[i0:i0 + n]:
+                vel = (v, 0.0, 0.0)
+                for body in bases:
+                    reset_vel(body, vel, zero, cid)
+                step(cid)
+            return
         pb.resetBasePositionAndOrientation(g, (self._u[i0], 0.0, self._ground_z),
                                            (0.0, 0.0, 0.0, 1.0), cid)
         for v in self._v[i0:i0 + n]:
@@ -381,10 +485,7 @@ class BulletEngine(Engine):
             step(cid)
 
     def _fix_base(self) -> bool:
-        pb, g, cid = self._pb, self._ground, self._cid
-        pb.resetBasePositionAndOrientation(g, (self._u_end, 0.0, self._ground_z),
-                                           (0.0, 0.0, 0.0, 1.0), cid)
-        pb.resetBaseVelocity(g, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), cid)
+        self._place_base(self._u_end, 0.0)
         return True
 
     def _advance(self, n: int) -> None:
@@ -416,6 +517,9 @@ class BulletEngine(Engine):
         for i, body in enumerate(self._bodies):
             (x, y, z), (qx, qy, qz, qw) = get(body, cid)
             out[i] = (x, y, z, qw, qx, qy, qz)
+        for i, c, s in self._turns:  # the block's orientation: q_body · rot_y(−φ)
+            w, qx, qy, qz = out[i, 3:].tolist()
+            out[i, 3:] = (w * c + qy * s, qx * c + qz * s, qy * c - w * s, qz * c - qx * s)
         return out
 
     def _teardown(self) -> None:
@@ -436,6 +540,37 @@ def product_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
     if mu_if == mu:
         return [math.sqrt(mu)] * (n_blocks + 1)
     return [mu] + [1.0 if i % 2 == 0 else mu_if for i in range(n_blocks)]
+
+
+def assembly_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
+    """Per-body coefficients (ground and supports first) for the blocks of an assembly.
+
+    A block of an assembly may touch other blocks and the base at once, so every
+    block gets sqrt(μ_if) and the base μ / sqrt(μ_if): block pairs get μ_if, block
+    and base μ. Needs μ_if > 0 unless μ = 0 too.
+    """
+    if mu_if == mu:
+        return [math.sqrt(mu)] * (n_blocks + 1)
+    root = math.sqrt(mu_if)
+    return [mu / root] + [root] * n_blocks
+
+
+def principal_frame(tensor: np.ndarray) -> tuple[float, tuple[float, float, float]]:
+    """Angle φ about y of the principal frame of an x–z-symmetric inertia tensor, and its
+    principal moments.
+
+    ``tensor`` is a centroidal inertia tensor whose y axis is principal (a prism
+    centred in depth). With R the rotation by φ about y (θ > 0: +z toward +x),
+    Rᵀ · tensor · R is diagonal; its diagonal is returned.
+    """
+    t = np.asarray(tensor, float)
+    # a product of inertia at rounding level (a symmetric section) is no turn
+    product = t[0, 2] if abs(t[0, 2]) > 1e-12 * (t[0, 0] + t[2, 2]) else 0.0
+    phi = 0.5 * math.atan2(-2.0 * product, t[0, 0] - t[2, 2])
+    c, s = math.cos(phi), math.sin(phi)
+    r = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    d = np.diag(r.T @ t @ r)
+    return phi, (float(d[0]), float(d[1]), float(d[2]))
 
 
 def _substeps_exact(n: int, dt: float) -> bool:
