@@ -23,6 +23,14 @@ judged, every engine departs from the 4 mm one at 0.97 s); these two cases
 are judged for ``accurate`` only and are not part of the cost. Cost is the
 sum of the runs' CPU times over the calibration cases.
 
+With ``--bounds group`` (:func:`group_bounds`) the same rule is applied
+against the preset's *worst* error of the case's group (free rocking, single
+pulses, stack pulses) instead of its error on that case: the accuracy class a
+preset is documented for ("B0–B3 within x λ, pulse peaks within y %"), not its
+error pattern case by case. A per-case bound asks a cheaper candidate to be
+within 10 % of the preset on each of 24 cases, which impact-driven runs two
+step sizes apart rarely are even when both are well inside the class.
+
 Search (:func:`prune_search`). Both presets are first run on every case (they
 set the bounds). Every other candidate is run on one cheap probe case
 (``PROBE``); its estimated cost is its probe CPU × the smallest
@@ -72,7 +80,8 @@ from rockbench.scenarios import get_scenario, get_suite
 from rockbench.trajectory import Status
 
 __all__ = ["run", "main", "GRIDS", "SUITES", "GUARDS", "CaseResult", "Trial", "Search",
-           "Judge", "guard_meets", "prune_search", "candidates", "search_engine"]
+           "Judge", "guard_meets", "group_bounds", "prune_search", "candidates",
+           "search_engine"]
 
 #: The calibration set of issue 19.
 SUITES = ("paper-free", "paper-single-pulse", "paper-stack-pulse")
@@ -144,6 +153,19 @@ class CaseResult:
         return (self.status == bound.status
                 and self.error <= max(SLACK * bound.error, ERROR_FLOOR)
                 and self.peak <= max(SLACK * bound.peak, PEAK_FLOOR))
+
+
+def group_bounds(bound: Mapping[str, CaseResult],
+                 groups: Sequence[Sequence[str]]) -> dict[str, CaseResult]:
+    """Each case's bound raised to the preset's worst (finite) error and peak error over
+    its group (status and CPU kept); cases in no group keep their own bound."""
+    out = dict(bound)
+    for g in groups:
+        err = max((bound[n].error for n in g if math.isfinite(bound[n].error)), default=math.inf)
+        peak = max((bound[n].peak for n in g if math.isfinite(bound[n].peak)), default=math.inf)
+        for n in g:
+            out[n] = CaseResult(bound[n].status, err, peak, bound[n].cpu, bound[n].wall)
+    return out
 
 
 def guard_meets(result: CaseResult, bound: CaseResult) -> bool:
@@ -359,12 +381,23 @@ class EngineSearch:
     wall: float
     load_start: str
     load_end: str
+    bounds_by: str = "case"
+
+
+def _groups(cases: Sequence[str]) -> list[list[str]]:
+    """The cases by kind (the part of the name before its parameters)."""
+    kinds: dict[str, list[str]] = {}
+    for n in cases:
+        kinds.setdefault(n.split("-")[0] + ("" if n.startswith("free") else n.split("-")[1]),
+                         []).append(n)
+    return list(kinds.values())
 
 
 def search_engine(engine: str, cases: Sequence[str], *, jobs: int = 2,
-                  budget: float = math.inf, cache: Path | None = None,
+                  budget: float = math.inf, cache: Path | None = None, bounds_by: str = "case",
                   log: Any = sys.stderr) -> EngineSearch:
-    """Run the presets, the probes and the pruned search of each preset for ``engine``."""
+    """Run the presets, the probes and the pruned search of each preset for ``engine``
+    (``bounds_by``: "case", or "group" for :func:`group_bounds`)."""
     t0, load0 = time.perf_counter(), load()
     if not engine_class(engine).fresh_process:  # (blender: one bpy session per process)
         warm(engine)  # libraries imported (and JIT-compiled) here: forked workers inherit them
@@ -388,12 +421,14 @@ def search_engine(engine: str, cases: Sequence[str], *, jobs: int = 2,
     def stop() -> bool:
         return time.perf_counter() - t0 > budget
 
+    if bounds_by == "group":
+        bounds = {p: group_bounds(b, _groups(cases)) for p, b in bounds.items()}
     searches = tuple(
         prune_search(f"preset={p}", bounds[p], estimates, runs, cost_cases=cases,
                      guards=guards if p == "accurate" else (), jobs=jobs, stop=stop)
         for p in ("fast", "accurate"))
     return EngineSearch(engine, tuple(cases), guards, probe, scale, estimates, dict(runs.done),
-                        searches, time.perf_counter() - t0, load0, load())
+                        searches, time.perf_counter() - t0, load0, load(), bounds_by)
 
 
 # ---------------------------------------------------------------------- report
@@ -429,7 +464,7 @@ def markdown(es: EngineSearch) -> list[str]:
     e = es.engine
     grid = "; ".join(" | ".join(_label(d) or "(preset values)" for d in axis)
                      for axis in GRIDS[e])
-    lines = [f"### {e}", "",
+    lines = [f"### {e}" + (" (group bounds)" if es.bounds_by == "group" else ""), "",
              f"{len(es.cases)} cases ({', '.join(es.cases)})"
              + (f"; guards of `accurate`: {', '.join(es.guards)}" if es.guards else "")
              + f". Grid (axes separated by ';'): {grid}. {len(es.estimates)} candidates, "
@@ -488,12 +523,15 @@ def _names(spec: str | None) -> list[str]:
 
 
 def run(quick: bool = False, engines: list[str] | None = None, *, cases: str | None = None,
-        jobs: int = 2, budget: float = math.inf, cache: Path | None = None) -> tuple[str, dict]:
+        jobs: int = 2, budget: float = math.inf, cache: Path | None = None,
+        bounds_by: str = "case") -> tuple[str, dict]:
     """Markdown section and raw numbers."""
     names = _names(",".join(QUICK) if quick and cases is None else cases)
+    where = "its worst over the case's group" if bounds_by == "group" else "on that case"
     lines = ["## Presets against the cheapest settings meeting their bounds (issue 19)", "",
              f"Bounds: same status on every case, within {SLACK:g} × the preset's max |Δθ|/λ "
-             f"and |Δpeak|/peak (floors {ERROR_FLOOR:g}, {PEAK_FLOOR:g}); guards: peak within "
+             f"and |Δpeak|/peak ({where}; "
+             f"floors {ERROR_FLOOR:g}, {PEAK_FLOOR:g}); guards: peak within "
              f"max({SLACK:g} × the preset's, {GUARD_TOL:.0%}). Cost = sum of the runs' CPU "
              "times over the calibration cases. The cheapest is the cheapest of the grid under "
              "the pruning of `benchmarks/preset_pareto.py` (its docstring).", ""]
@@ -503,7 +541,7 @@ def run(quick: bool = False, engines: list[str] | None = None, *, cases: str | N
         if not ok:
             lines += [f"### {e}", "", what, ""]
             continue
-        es = search_engine(e, names, jobs=jobs, budget=budget, cache=cache)
+        es = search_engine(e, names, jobs=jobs, budget=budget, cache=cache, bounds_by=bounds_by)
         lines += markdown(es)
         data[e] = {s.preset: dict(cost=s.cost, best=s.best.label, best_cpu=s.best.cpu,
                                   ratio=s.ratio) for s in es.searches}
@@ -520,9 +558,11 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--cache", type=Path, help="JSON-lines file of runs (read and appended)")
     ap.add_argument("--out", type=Path, help="append the Markdown to this file")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--bounds", choices=("case", "group"), default="case",
+                    help="bound each case by the preset's error there, or by its group's worst")
     a = ap.parse_args(argv)
     text, _ = run(a.quick, a.engines or None, cases=a.cases, jobs=a.jobs, budget=a.budget,
-                  cache=a.cache)
+                  cache=a.cache, bounds_by=a.bounds)
     print(text)
     if a.out is not None:
         with a.out.open("a") as f:

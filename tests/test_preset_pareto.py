@@ -17,6 +17,7 @@ from benchmarks.preset_pareto import (
     SLACK,
     CaseResult,
     candidates,
+    group_bounds,
     guard_meets,
     prune_search,
 )
@@ -140,3 +141,13 @@ def test_grids_hold_the_presets_once_and_valid_settings(engine: str) -> None:
     # both presets are grid points (their neighbours are the grid's other values): the
     # combinations equal to them are dropped, so the count is the grid's size
     assert len(cands) == math.prod(len(axis) for axis in GRIDS[engine])
+
+
+def test_group_bounds_raise_each_case_to_its_groups_worst() -> None:
+    bound = {"a": _r(0.01, 1.0, 0.02), "b": _r(0.03, 2.0, 0.001),
+             "c": _r(float("inf"), 3.0, 0.05, Status.OVERTURNED), "g": _r(0.5, 1.0, 0.01)}
+    gb = group_bounds(bound, [["a", "b", "c"]])
+    assert gb["a"].error == gb["b"].error == gb["c"].error == 0.03  # the finite worst
+    assert gb["a"].peak == 0.05 and gb["b"].cpu == 2.0
+    assert gb["c"].status is Status.OVERTURNED and gb["g"] == bound["g"]
+    assert _r(0.033, 1.0, 0.02).meets(gb["a"]) and not _r(0.033, 1.0, 0.02).meets(bound["a"])
