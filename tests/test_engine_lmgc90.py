@@ -10,7 +10,12 @@ import pytest
 from engine_helpers import B0_IMPACTS, SINGLE2, check_base_follows_excitation, check_sine_pulse_peak
 
 from rockbench.analytic.housner import single_block_reference
-from rockbench.engines.lmgc90_engine import Lmgc90Engine, Lmgc90Settings, _velocity_table
+from rockbench.engines.lmgc90_engine import (
+    Lmgc90Engine,
+    Lmgc90Settings,
+    _quaternions,
+    _velocity_table,
+)
 from rockbench.engines.settings import SettingsError
 from rockbench.errors import EngineUnavailable
 from rockbench.metrics import impact_times
@@ -160,3 +165,20 @@ def test_velocity_table_is_the_exact_base_velocity() -> None:
     # the trapezoidal rule of the table moves the base by the pulse's displacement
     u_end = float(np.sum(0.5 * (v[1:] + v[:-1]) * np.diff(t)))
     assert u_end == pytest.approx(2 * math.pi * 0.004, rel=1e-5)
+
+
+def test_quaternion_of_rotation_matrices() -> None:
+    from scipy.spatial.transform import Rotation
+
+    rots = Rotation.random(200, random_state=1)
+    # every branch of Shepperd's method: near-identity, and half turns about each axis
+    rots = Rotation.concatenate([rots, Rotation.from_rotvec(np.diag([3.1, 3.1, 3.1])),
+                                 Rotation.from_rotvec([[0.0, 0.3, 0.0]])])
+    q = _quaternions(rots.as_matrix())
+    ref = np.roll(rots.as_quat(), 1, axis=-1)  # SciPy's (x, y, z, w) as (w, x, y, z)
+    sign = np.sign(np.sum(q * ref, axis=-1, keepdims=True))
+    np.testing.assert_allclose(sign * q, ref, atol=1e-12)
+    # θ about +y has the quaternion (cos θ/2, 0, sin θ/2, 0) the base class reads back
+    c, s = math.cos(0.3), math.sin(0.3)
+    q = _quaternions(np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]))
+    np.testing.assert_allclose(q, [math.cos(0.15), 0.0, math.sin(0.15), 0.0], atol=1e-15)

@@ -154,10 +154,11 @@ class Lmgc90Engine(Engine):
     def __init__(self) -> None:
         self._solver: Any = None
         self._step: Any = None
-        self._frame0 = np.zeros((0, 3, 3))
-        self._r0 = np.zeros((0, 3, 3))
+        self._m0 = np.zeros((0, 3, 3))
         self._poses = np.zeros((0, 7))
-        self._last: Any = None
+        # the last state LMGC90 reported: every body's centre of inertia and frame
+        self._coor: Any = ()
+        self._frames: Any = ()
         #: Where the base ended (m along x), recorded at teardown.
         self.base_end = math.nan
 
@@ -223,10 +224,12 @@ class Lmgc90Engine(Engine):
         solver.contact_law(_LAW, float(scenario.contact.friction), alert=float(s.alert))
         solver.preprocess()
         init = solver.lmgc90.get_initial_state()
-        self._frame0 = np.array([np.reshape(f, (3, 3)) for f in init.init_body_frames[1:]])
-        self._r0 = np.array(rot0)
+        # the frame's rows are the principal axes (world components): the rotation since
+        # the build is Fᵀ F0, applied to the block's initial orientation R0
+        frame0 = np.reshape(init.init_body_frames[1:], (-1, 3, 3))
+        self._m0 = frame0 @ np.array(rot0)
+        self._coor, self._frames = init.init_bodies, init.init_body_frames
         self._step = solver.lmgc90.compute_one_step
-        self._last = init
         self._poses = np.zeros((len(blocks), 7))
         return dt
 
@@ -245,28 +248,42 @@ class Lmgc90Engine(Engine):
         step = self._step
         for _ in range(n):
             last = step()
-        self._last = last
+        self._coor, self._frames = last.bodies, last.body_frames
+
+    def _sample_free(self, out: np.ndarray, k: int) -> None:
+        # LMGC90 reports every state as Python lists: keep them, convert once per chunk
+        step = self._step
+        coor, frames = [], []
+        for _ in range(out.shape[0]):
+            for _ in range(k):
+                last = step()
+            coor.append(last.bodies)
+            frames.append(last.body_frames)
+        self._coor, self._frames = coor[-1], frames[-1]
+        self._poses_into(out, np.asarray(coor), np.asarray(frames))
+
+    def _sample_driven(self, out: np.ndarray, step0: int, k: int, dt: float) -> None:
+        # the base follows its evolution table: driven steps are plain steps
+        self._sample_free(out, k)
 
     def _read_poses(self) -> np.ndarray:
-        res = self._last
-        coor = res.bodies if hasattr(res, "bodies") and len(res.bodies) else res.init_bodies
-        frames = res.body_frames if len(res.body_frames) else res.init_body_frames
         out = self._poses
-        for i in range(out.shape[0]):
-            a = np.reshape(frames[i + 1], (3, 3))
-            # the frame's rows are the principal axes (world components): the rotation
-            # since the build, applied to the block's initial orientation
-            r = a.T @ self._frame0[i] @ self._r0[i]
-            out[i, :3] = coor[i + 1]
-            out[i, 3:] = _quaternion(r)
+        self._poses_into(out[None], np.asarray(self._coor)[None], np.asarray(self._frames)[None])
         return out
 
+    def _poses_into(self, out: np.ndarray, coor: np.ndarray, frames: np.ndarray) -> None:
+        """Fill ``out`` (m, n_blocks, 7) from LMGC90's (m, n_bodies, 3) and (m, n_bodies, 9)."""
+        out[..., :3] = coor[:, 1:]
+        f = frames[:, 1:].reshape(frames.shape[0], -1, 3, 3)
+        out[..., 3:] = _quaternions(np.matmul(np.swapaxes(f, -1, -2), self._m0))
+
     def _teardown(self) -> None:
-        if self._last is not None and len(getattr(self._last, "bodies", ())):
-            self.base_end = float(self._last.bodies[0][0])
+        if len(self._coor):
+            self.base_end = float(self._coor[0][0])
         if self._solver is not None:
             self._solver.finalize()
-        self._solver = self._step = self._last = None
+        self._solver = self._step = None
+        self._coor, self._frames = (), ()
 
 
 def _f2f_tol_setter() -> Any:
@@ -296,23 +313,29 @@ def _rot_y(th: float) -> np.ndarray:
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
-def _quaternion(r: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method)."""
-    tr = r[0, 0] + r[1, 1] + r[2, 2]
-    if tr > 0.0:
-        w = 0.5 * math.sqrt(1.0 + tr)
-        k = 0.25 / w
-        q = (w, (r[2, 1] - r[1, 2]) * k, (r[0, 2] - r[2, 0]) * k, (r[1, 0] - r[0, 1]) * k)
-    else:
-        i = int(np.argmax(np.diag(r)))
-        j, m = (i + 1) % 3, (i + 2) % 3
-        s = 2.0 * math.sqrt(max(1.0 + r[i, i] - r[j, j] - r[m, m], 0.0))
-        v = [0.0, 0.0, 0.0]
-        v[i] = 0.25 * s
-        v[j] = (r[j, i] + r[i, j]) / s
-        v[m] = (r[m, i] + r[i, m]) / s
-        q = ((r[m, j] - r[j, m]) / s, *v)
-    return np.asarray(q) / math.sqrt(sum(x * x for x in q))
+def _quaternions(r: np.ndarray) -> np.ndarray:
+    """Unit quaternions (w, x, y, z) of rotation matrices, shape (..., 3, 3) -> (..., 4).
+
+    Shepperd's method, vectorised: of the four algebraically equal forms, each
+    matrix uses the one dividing by the largest of 4w², 4x², 4y², 4z².
+    """
+    r00, r01, r02 = r[..., 0, 0], r[..., 0, 1], r[..., 0, 2]
+    r10, r11, r12 = r[..., 1, 0], r[..., 1, 1], r[..., 1, 2]
+    r20, r21, r22 = r[..., 2, 0], r[..., 2, 1], r[..., 2, 2]
+    big = np.stack([1.0 + r00 + r11 + r22, 1.0 + r00 - r11 - r22,
+                    1.0 - r00 + r11 - r22, 1.0 - r00 - r11 + r22], axis=-1)
+    s = 2.0 * np.sqrt(np.maximum(big, 1e-300))  # 4|q_i| for each form
+    a, b, c = r21 - r12, r02 - r20, r10 - r01   # 4w·(x, y, z)
+    d, e, f = r01 + r10, r02 + r20, r12 + r21   # 4xy, 4xz, 4yz
+    forms = np.stack([
+        np.stack([s[..., 0] / 4, a / s[..., 0], b / s[..., 0], c / s[..., 0]], axis=-1),
+        np.stack([a / s[..., 1], s[..., 1] / 4, d / s[..., 1], e / s[..., 1]], axis=-1),
+        np.stack([b / s[..., 2], d / s[..., 2], s[..., 2] / 4, f / s[..., 2]], axis=-1),
+        np.stack([c / s[..., 3], e / s[..., 3], f / s[..., 3], s[..., 3] / 4], axis=-1),
+    ], axis=-2)
+    pick = np.argmax(big, axis=-1)[..., None, None]
+    q = np.take_along_axis(forms, pick, axis=-2)[..., 0, :]
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
 
 
 def _prism(profile: np.ndarray, half_depth: float) -> tuple[np.ndarray, list[list[int]]]:
