@@ -48,7 +48,8 @@ cases are recorded. ``cost(preset) / cost(cheapest)`` is reported (1.0: the
 preset is on the front of this grid; goal ≤ 1.2).
 
 Run ``python -m benchmarks.preset_pareto pymunk dem2d [--jobs 2]
-[--cases SPEC] [--budget S] [--cache FILE] [--out FILE]`` (chosen engines;
+[--bounds case|group] [--cases SPEC] [--budget S] [--cache FILE] [--out FILE]``
+(chosen engines; ``--bounds`` the per-case rule (default) or the group rule above;
 ``--cases`` a comma list of suites or cases instead of the calibration set,
 ``--budget`` a wall-time limit on each engine's searches (after its presets and
 probes) past which the remaining candidates are left unjudged, ``--cache`` a
