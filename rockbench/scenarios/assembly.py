@@ -361,6 +361,11 @@ class Assembly:
         The normalising λ of an assembly: the limit-analysis collapse factor α
         with no sliding (μ = ∞), the smaller of the two directions; the
         smallest block's own λ = atan(b/h) for an assembly with no mechanism.
+        It is a unit, not the collapse angle where head joints matter: a
+        running-bond wall gets atan 1.0 here (the associative LP leans on friction
+        at head joints nothing presses) and collapses at atan(11/19) with real
+        Coulomb joints (``limit_analysis(..., flow="non-associative")``, which the
+        tilting table and pulse to collapse use).
         """
         return _critical_angle(self, float(g))
 
