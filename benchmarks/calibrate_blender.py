@@ -11,18 +11,28 @@ preset, the figures of the engine table. Unless ``--no-overhead``, it also times
 the plugin's hooks against a raw bpy loop (``scene.frame_set`` and
 ``matrix_world`` per frame) on B0.
 
+``--bullet-breaking-threshold X`` is a diagnostic, not a Blender setting: before the
+runs it writes X into Bullet's process-global ``gContactBreakingThreshold`` (default
+0.02, which Bullet scales by each shape's bounding radius: 5 cm on B0) inside the
+loaded bpy binary, found through the binary's symbol table (needs binutils' ``nm``).
+Blender exposes no such knob; the option measures how much of the remaining error is
+Bullet keeping a lifted corner's contact points in the manifold (see the engine's
+module docstring).
+
 Usage::
 
     python benchmarks/calibrate_blender.py [--preset accurate,fast,paper]
         [--set knob=value ...] [--only free|pulse] [--duration 20] [--cases substr,...]
-        [--no-overhead]
+        [--no-overhead] [--bullet-breaking-threshold 1e-4]
 
 The reference is ``rockbench.analytic.housner.single_block_reference``.
 """
 
 from __future__ import annotations
 
+import ctypes
 import math
+import subprocess
 import sys
 import time
 from typing import Any
@@ -83,13 +93,47 @@ def raw_loop(engine: BlenderEngine, scenario: Scenario, settings: Any, dt: float
     return time.perf_counter() - t0
 
 
+def set_breaking_threshold(value: float) -> float:
+    """Write Bullet's ``gContactBreakingThreshold`` inside the loaded bpy; return the old value.
+
+    bpy must be imported. The variable is located by its offset from ``PyInit_bpy`` in
+    the binary's symbol table; the old value must be Bullet's default 0.02 as a double
+    (Blender builds Bullet in double precision), else nothing is written.
+    """
+    with open("/proc/self/maps") as maps:
+        so = next(line.split()[-1] for line in maps
+                  if line.rstrip().endswith("bpy/__init__.so"))
+    want = ("PyInit_bpy", "gContactBreakingThreshold")
+    syms = {}
+    for line in subprocess.run(["nm", so], capture_output=True, text=True,
+                               check=True).stdout.splitlines():
+        parts = line.split()
+        if len(parts) == 3 and parts[2] in want:
+            syms[parts[2]] = int(parts[0], 16)
+    init = ctypes.cast(ctypes.CDLL(so).PyInit_bpy, ctypes.c_void_p).value
+    cell = ctypes.c_double.from_address(init - syms["PyInit_bpy"]
+                                        + syms["gContactBreakingThreshold"])
+    old = cell.value
+    if old != 0.02:
+        raise RuntimeError(f"gContactBreakingThreshold reads {old!r}, not Bullet's 0.02: "
+                           "not this bpy build's layout, nothing written")
+    cell.value = value
+    return old
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = cal.parser(__doc__)
+    ap.add_argument("--bullet-breaking-threshold", type=float, default=None, metavar="X",
+                    help="diagnostic: Bullet's gContactBreakingThreshold (Blender: 0.02)")
     ap.set_defaults(preset="accurate,fast,paper")
     args = ap.parse_args(argv)
     engine = BlenderEngine()
     ov = cal.overrides(args)
     print(f"blender {engine.version()}; overrides {ov or 'none'}\n")
+    if args.bullet_breaking_threshold is not None:
+        old = set_breaking_threshold(args.bullet_breaking_threshold)
+        print(f"diagnostic: Bullet's gContactBreakingThreshold {old:g} -> "
+              f"{args.bullet_breaking_threshold:g} (not a Blender setting)\n")
     for preset in args.preset.split(","):
         s = engine.settings(preset, **ov)
         print(f"### preset `{preset}`: {s.to_dict()} (Δt = {s.dt:.3g} s)\n")

@@ -52,6 +52,8 @@ def test_presets_and_time_step_rule(engine: BlenderEngine) -> None:
     assert engine.settings("fast").dt == pytest.approx(1e-3)
     paper = engine.settings("paper")
     assert paper.dt == pytest.approx(1.0 / (240 * 20)) and paper.frame == pytest.approx(1 / 240)
+    # the calibrated presets hold the blocks in the rocking plane; the paper's were free
+    assert engine.settings().planar and engine.settings("fast").planar and not paper.planar
     for bad in ({"collision_shape": "sphere"}, {"substeps_per_frame": 0},
                 {"solver_iterations": 1001}, {"fps": 0.0}, {"restitution": 1.5}):
         with pytest.raises(SettingsError):
@@ -141,13 +143,40 @@ def test_free_rocking_b0_accurate(engine: BlenderEngine) -> None:
     ref = single_block_reference(sc)
     tr = engine.simulate(sc, "accurate")
     assert tr.status is Status.OK
-    # measured with benchmarks/calibrate_blender.py: the first three impacts within
-    # 0.26 %, max |θ − θ_ref| 0.011 λ over 3.6 s (Blender's floor: see the module docstring)
-    np.testing.assert_allclose(impact_times(tr)[:3], impact_times(ref)[:3], rtol=5e-3)
+    # measured with benchmarks/calibrate_blender.py: held in the plane, the first three
+    # impacts within 0.01 %, max |θ − θ_ref| 0.0004 λ over 3.6 s (free in 3D: 0.26 % and
+    # 0.011 λ, the pivot creep; see the module docstring)
+    np.testing.assert_allclose(impact_times(tr)[:3], impact_times(ref)[:3], rtol=5e-4)
     err = np.max(np.abs(tr.theta[:, 0] - ref.theta[:, 0])) / sc.critical_angle
-    assert err <= 0.02
+    assert err <= 2e-3
     # the block never rocks higher than it started (no energy gain)
     assert np.max(np.abs(tr.theta[:, 0])) <= sc.theta0 * (1 + 1e-4)
+
+
+def _pivot_creep(tr, blk: Block) -> np.ndarray:
+    """Slip of the rocking pivot along x (m): centroid x minus where a stuck corner puts it."""
+    th = tr.theta[:, 0]
+    s = np.sign(th)
+    return tr.x[:, 0] - (-s * blk.b * np.cos(th) + blk.h * np.sin(th)) - s * blk.b
+
+
+@needs_bpy
+@pytest.mark.parametrize("planar", [True, False])
+def test_planar_constraint_stops_pivot_creep(engine: BlenderEngine, planar: bool) -> None:
+    # B0 free until just before its first impact (0.776 s): friction 1 holds the pivot
+    # corner in Housner's model. Free in 3D, Blender's Bullet lets it creep outward
+    # (measured +166 µm at Δt 0.1 ms, ∝ Δt, whatever the friction, iterations, shape or
+    # margin) and the block twists out of plane; held in the plane it creeps 11 µm
+    sc = get_scenario("free-b0").replace(duration=0.77)
+    blk = sc.blocks[0]
+    tr = engine.simulate(sc, {"preset": "accurate", "planar": planar})
+    assert tr.status is Status.OK
+    creep = float(np.max(np.abs(_pivot_creep(tr, blk))))
+    wobble = float(np.max(tr.wobble))
+    if planar:
+        assert creep < 3e-5 and wobble < 1e-6
+    else:
+        assert creep > 1e-4 and wobble > 5e-6
 
 
 @needs_bpy

@@ -54,6 +54,27 @@ What Blender really does (measured with bpy 5.0.1, see tests/test_engine_blender
   shape's bounding box, i.e. the uncut box's inertia the analytic models also use.
 * **Split impulse** changes nothing measurable here (bit-identical runs): Bullet uses it
   only for penetrations deeper than its threshold (−0.04 m), which rocking never reaches.
+* **Pivot creep; the planar constraint.** A free block's sticking pivot creeps in
+  Blender's Bullet: B0 released at 0.5 λ slides its pivot corner +166 µm outward before
+  its first impact at Δt 0.1 ms (1.9 mm at 1 ms, 17 µm at 0.01 ms: ∝ Δt), whatever the
+  friction (1 or 100), iterations (10–200), shape (box or hull) or margin, and twists
+  out of plane (wobble 0.07 rad after 10 s). Each half cycle then loses 0.2–0.5 % more
+  amplitude than Housner's η gives, and impacts come early (1 % by the 11th); this was
+  the 0.08 λ of B0. Bullet gives each contact point one friction direction, along the
+  slip velocity before the solve, which at a sticking pivot is solver noise with
+  out-of-plane parts: likely some steps leave the in-plane slip unresisted (pybullet
+  with Blender's solver settings creeps 0–10 µm). A GENERIC rigid body constraint from
+  the base to each block locking y, roll and yaw (``planar``, on in ``accurate`` and
+  ``fast``) removes it: creep 11 µm, no wobble, B0 0.020 λ over 20 s (Housner's η to
+  0.01 % at the first six impacts).
+* **Contact breaking threshold: the remaining floor.** Held in the plane, B0 loses
+  about 0.1 % more than η per impact once its amplitude is below 0.25 λ (from the 6th
+  impact), where the lifted corner stays within Bullet's contact breaking threshold
+  (0.02 × the block's bounding radius, 5.1 cm on B0) and its points stay in the contact
+  manifold. Blender exposes no such setting; writing 1e-4 into Bullet's global
+  (``benchmarks/calibrate_blender.py --bullet-breaking-threshold 1e-4``, a diagnostic)
+  brings B0 to 0.005 λ, while time step (0.05 ms), iterations (20–100) and split
+  impulse leave it at 0.020–0.022 λ.
 * **Depsgraph order.** With the base location only set from Python (or keyframed),
   Blender sometimes stepped the simulation before evaluating the base's new transform
   (two outcomes 8e-4 rad apart on a pulse, run to run); the view layer is therefore
@@ -82,12 +103,16 @@ The paper's two-block stack under the eight pulses (``paper-stack-pulse``, accur
 peaks of both blocks −24 to +4 % of the two-block reference (−24 % at 3.3 Hz/4 mm, an
 uplift ratio of 1.12).
 
-The paper's Table 2 study (``rockbench compare --suite paper-sensitivity``, from
-``accurate``, B0): iterations 10/100/1000 and margins 1e-3/1e-5/1e-6 m barely matter
-(0.08–0.10 λ; margins bit-identical with box shapes), a mesh dissipates far too little
-(0.65 λ, still rocking at 20 s), sub-steps and rate matter most: 2 sub-steps at the
-paper's 240 fps stop B0 at 10.4 s (the paper: 10–11 s; Housner: 16.5 s to |θ| < 0.01 λ),
-at 60 fps at 5.9 s.
+The paper's Table 2 study (``rockbench compare --suite paper-sensitivity``, B0), measured
+with free blocks, as the paper's were (the variations start from the first preset: add
+``--set blender.planar=false`` to ``--presets accurate``): iterations 10/100/1000 and
+margins 1e-3/1e-5/1e-6 m barely matter (0.08–0.10 λ; margins bit-identical with box
+shapes), a mesh dissipates far too little (0.65 λ, still rocking at 20 s), sub-steps and
+rate matter most: 2 sub-steps at the paper's 240 fps stop B0 at 10.4–10.5 s (the paper:
+10–11 s; Housner: 16.5 s to |θ| < 0.01 λ), at 60 fps at 5.9 s. Held in the plane the
+same variations stop it at 13.5 s and 11.3 s (0.15 λ), and 240 fps × 20 sub-steps at
+16.1 s (0.041 λ; free: 15.3 s, 0.11 λ): much of what the paper attributed to sub-steps
+is the pivot creep, which grows with the step.
 """
 
 from __future__ import annotations
@@ -175,11 +200,17 @@ class BlenderSettings(EngineSettings):
         slide along x only and given the velocity (u_g(t_f) − u_g(t_{f−1})) · fps by a
         MOTOR constraint's target velocity, set every frame (Blender exposes no rigid
         body velocity to Python; the motor is the only velocity input).
+    planar : bool
+        Hold every block in the rocking plane with a rigid body constraint (GENERIC,
+        from the base to the block, collisions kept): y translation, roll and yaw
+        locked, x, z and the rocking angle free. Without it Bullet's contact friction
+        lets the sticking pivot creep and the block twist out of plane, the main error
+        of free rocking (see the module docstring). The paper's blocks were free (False).
     """
 
     fps: float = 1000.0
     substeps_per_frame: int = 10
-    solver_iterations: int = 50
+    solver_iterations: int = 20
     use_split_impulse: bool = True
     collision_shape: Literal["box", "convex", "mesh"] = "box"
     use_margin: bool = True
@@ -189,6 +220,7 @@ class BlenderSettings(EngineSettings):
     linear_damping: float = 0.0
     angular_damping: float = 0.0
     drive: Literal["kinematic", "motor"] = "kinematic"
+    planar: bool = True
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.fps) and 0.0 < self.fps <= 32767.0):
@@ -232,20 +264,22 @@ class BlenderEngine(Engine):
     requires: ClassVar[tuple[str, ...]] = ("bpy",)
     extra: ClassVar[str] = "blender"
     presets: ClassVar[dict[str, dict[str, Any]]] = {
-        # Δt 0.1 ms (1000 fps × 10 sub-steps), 50 iterations (100: B1 impacts 12 % early
-        # instead of 2.5 %, mirrored 3 Hz/8 mm pulses 0.011 λ apart instead of 0.005 λ):
+        # Δt 0.1 ms (1000 fps × 10 sub-steps), 20 iterations, blocks held in the rocking
+        # plane (50 iterations: as accurate on free rocking, but one of the mirrored
+        # 3 Hz/8 mm pulses rocks 0.6 % higher, 0.014 λ apart; 20: 0.0004 λ):
         # calibration in benchmarks/calibrate_blender.py
         "accurate": {},
-        # Δt 1 ms, one step per frame
-        "fast": {"fps": 1000.0, "substeps_per_frame": 1},
+        # Δt 1 ms, one step per frame, 50 iterations, planar
+        "fast": {"fps": 1000.0, "substeps_per_frame": 1, "solver_iterations": 50},
         # the paper's Blender set-up as far as it is printed: box shapes, the middle
         # values of its Table 2 (100 iterations, 20 sub-steps, 1e-5 m margin) at its
         # highest rate, 240 fps (its 3.5 s per 20 s at 240 fps fits 20 sub-steps, not
         # 200; and 2 sub-steps at 240 fps stop B0 at 10.4 s, the paper's 10–11 s),
-        # Blender's default split impulse (off). Δt = 1/4800 s by Blender's rule.
+        # Blender's default split impulse (off), free blocks. Δt = 1/4800 s by Blender's
+        # rule.
         "paper": {"fps": 240.0, "substeps_per_frame": 20, "solver_iterations": 100,
                   "use_split_impulse": False, "collision_shape": "box", "use_margin": True,
-                  "collision_margin": 1e-5},
+                  "collision_margin": 1e-5, "planar": False},
     }
     known_failures: ClassVar[dict[str, str]] = {}
 
@@ -358,6 +392,8 @@ class BlenderEngine(Engine):
             _rigid_body(bpy, ob, s, type_="ACTIVE", shape=shape, mass=blk.m, friction=mu,
                         restitution=e, kinematic=False)
             self._blocks.append(ob)
+            if s.planar:
+                _planar_constraint(bpy, scene, base, ob)
         self._poses = np.zeros((len(blocks), 7))
 
         # base displacement at every frame end (frame f is time (f − 1) / fps); split
@@ -508,6 +544,36 @@ def _rigid_body(bpy: Any, ob: Any, s: BlenderSettings, *, type_: str, shape: str
     rb.collision_margin = s.collision_margin
     rb.use_deactivation = False
     rb.use_start_deactivated = False
+
+
+def _planar_constraint(bpy: Any, scene: Any, base: Any, ob: Any) -> Any:
+    """A GENERIC constraint from the base to block ``ob``: y, roll and yaw locked.
+
+    The base is object1, so the linear limits are along the constraint frame's axes
+    fixed to the base. The frame sits at the block's initial centroid, turned 90° about
+    z so that its x axis is the world y axis: Bullet's 6-DOF constraint measures angles
+    as Euler XYZ, whose middle angle (about the frame's y) is singular at ±90°, which an
+    overturning block passes (free about the frame's y, one exploded there); its x angle
+    covers ±180°. Collisions stay enabled.
+    """
+    empty = bpy.data.objects.new(f"planar_{ob.name}", None)
+    scene.collection.objects.link(empty)
+    empty.location = ob.location
+    empty.rotation_euler = (0.0, 0.0, 0.5 * math.pi)
+    _operator(bpy, scene, empty, bpy.ops.rigidbody.constraint_add, type="GENERIC")
+    c = empty.rigid_body_constraint
+    c.object1, c.object2, c.disable_collisions = base, ob, False
+    c.use_breaking = False
+    c.use_override_solver_iterations = False
+    # frame x = world y (locked), frame y = world −x, frame z = world z (free); rotation
+    # free about frame x (the rocking axis), locked about frame y and z
+    for axis in ("lin_x", "lin_y", "lin_z", "ang_x", "ang_y", "ang_z"):
+        locked = axis in ("lin_x", "ang_y", "ang_z")
+        setattr(c, f"use_limit_{axis}", locked)
+        if locked:
+            setattr(c, f"limit_{axis}_lower", 0.0)
+            setattr(c, f"limit_{axis}_upper", 0.0)
+    return c
 
 
 def _motor_drive(bpy: Any, scene: Any, base: Any, s: BlenderSettings) -> Any:
