@@ -19,13 +19,27 @@ Scene (built as an MJCF string from the Scenario)
   are batched in C.
 * Contacts: condim 3, Coulomb friction from the scenario (an interface
   friction on the blocks' geoms, the base's friction on the base geom, whose
-  higher ``priority`` makes it rule its contacts with the blocks), elliptic cone by
-  default, ``solref`` time constant = ``timeconst_factor`` × time step and damping
-  ratio ``dampratio`` (critical damping gives a perfectly plastic impact),
-  ``solimp`` tight. MuJoCo has no restitution coefficient: a scenario
-  restitution e > 0 is mapped onto the damping ratio of the contact spring,
+  higher ``priority`` makes it rule its contacts with the blocks), pyramidal cone
+  by default, ``solref`` time constant = ``timeconst_factor`` × time step and damping
+  ratio ``dampratio``, ``solimp`` tight. MuJoCo has no restitution coefficient: a
+  scenario restitution e > 0 is mapped onto the damping ratio of the contact spring,
   ζ = −ln e / sqrt(π² + ln² e) (the linear spring–damper whose bounce is e);
   this is approximate because the contact also has an impedance (solimp).
+* Why ζ = 3 and not critical damping for a plastic impact: a contact is found
+  only once the corner has penetrated, up to one step's travel v·dt. With
+  τ = 2 dt the damping B = 2/τ stops the approach in about one step, but the
+  spring K = 1/(τζ)² then pushes the corner out at about K·v·dt² = v/(4ζ²): a
+  rebound e ≈ 0.25 at ζ = 1 whatever the step. It made the upper block of a stack
+  hop off its new pivot at every interface impact (measured on
+  stack-sine-5.0hz-4mm: 7.6e-5 m of interface slip in one impact, 1e-4 m gaps) and
+  the stack sinusoids never converged as dt shrank. ζ = 3 (e ≈ 0.03) keeps the
+  corner down; the penetration of that step (≈ 8 µm) is pushed out in a few ms.
+* Why the pyramidal cone: MuJoCo's convex (regularised) contact lets a sliding
+  contact separate at a rate that grows with μ·B·|v_slip|; with the elliptic cone
+  a block sliding on the base hopped (in contact 4–20 % of the time on
+  slide-single-pulse-3.0hz-8mm-mu0.10, a 5.4 % slip error) and rocked to 0.09 λ on
+  the 5 Hz / 6 mm case. The pyramidal cone (with ``impratio`` 10, which makes its
+  facets harder) slides like Coulomb there and is cheaper.
 * No damping, no sleeping.
 """
 
@@ -63,8 +77,10 @@ class MujocoSettings(EngineSettings):
         clamps it to ≥ 2 steps (``refsafe``); 2–5 works, larger makes contacts
         softer (more penetration, impacts smeared and early).
     dampratio : float
-        Contact ``solref`` damping ratio used when the scenario restitution is 0
-        (1 = critical: a plastic impact, as Housner assumes).
+        Contact ``solref`` damping ratio used when the scenario restitution is 0.
+        It lowers the contact stiffness at a fixed time constant (K ∝ 1/ζ²); at
+        τ = 2 dt a corner that lands inside the contact rebounds with e ≈ 1/(4ζ²),
+        so Housner's plastic impact needs ζ ≈ 3 (see the module docstring), not 1.
     solimp_dmin : float
         ``solimp`` d0: constraint impedance at zero penetration (0–1, 1 = hard).
     solimp_dmax : float
@@ -75,7 +91,10 @@ class MujocoSettings(EngineSettings):
         Time integrator. Euler is semi-implicit (symplectic) and the cheapest.
         RK4 is not offered: it integrates the base's holding damping explicitly.
     cone : {"elliptic", "pyramidal"}
-        Friction cone. Elliptic is exact Coulomb; pyramidal is a linearisation.
+        Friction cone. Elliptic is isotropic Coulomb; the pyramid is exact along its
+        edges, the contact frame's tangents, which for these faces are y and the
+        in-plane direction: Coulomb in the x–z plane. Pyramidal is the default (see
+        the module docstring: elliptic cones lift sliding blocks).
     solver : {"Newton", "CG", "PGS"}
         Constraint solver.
     iterations : int
@@ -97,19 +116,22 @@ class MujocoSettings(EngineSettings):
     Notes
     -----
     Calibrated with ``benchmarks/calibrate_mujoco.py`` (free rocking B0–B3, six
-    sine pulses): ``accurate`` (dt 0.1 ms, τ = 2 dt) stays below 2e-3 λ and 0.11 %
-    on pulse peaks; ``fast`` (dt 1 ms, τ = 4 dt; τ = 2 dt loses too much energy per
-    impact at this step) stays below 0.032 λ and 1.1 %.
+    sine pulses): ``accurate`` (dt 0.1 ms, τ = 2 dt, ζ = 3, pyramidal cone) stays
+    below 1.8e-3 λ and 0.10 % on pulse peaks; ``fast`` (dt 1 ms, τ = 4 dt; τ = 2 dt
+    loses too much energy per impact at this step; ζ = 1, elliptic cone) stays below
+    0.032 λ and 1.1 %. On the paper's stack (``benchmarks/stack_convergence.py``)
+    ``accurate`` keeps both peaks of every stack pulse within 0.7 % and of the two
+    well-posed sinusoids within 1.7 %, with < 2e-5 m of interface slip.
     """
 
     timestep: float = 1.0e-4
     timeconst_factor: float = 2.0
-    dampratio: float = 1.0
+    dampratio: float = 3.0
     solimp_dmin: float = 0.99
     solimp_dmax: float = 0.999
     solimp_width: float = 0.001
     integrator: Literal["Euler", "implicitfast", "implicit"] = "Euler"
-    cone: Literal["elliptic", "pyramidal"] = "elliptic"
+    cone: Literal["elliptic", "pyramidal"] = "pyramidal"
     solver: Literal["Newton", "CG", "PGS"] = "Newton"
     iterations: int = 100
     tolerance: float = 1.0e-10
@@ -160,9 +182,10 @@ class MujocoEngine(Engine):
     Settings: ClassVar[type[EngineSettings]] = MujocoSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
-        # dt ≤ 1/output_rate: the base loop takes whole steps per output sample
+        # dt ≤ 1/output_rate: the base loop takes whole steps per output sample; at τ = 4 dt
+        # the rebound is small with ζ = 1 (calibrated so, with the elliptic cone)
         "fast": {"timestep": 1.0e-3, "timeconst_factor": 4.0, "iterations": 50,
-                 "tolerance": 1.0e-8},
+                 "tolerance": 1.0e-8, "dampratio": 1.0, "cone": "elliptic"},
     }
     requires: ClassVar[tuple[str, ...]] = ("mujoco",)
     extra: ClassVar[str] = "mujoco"
