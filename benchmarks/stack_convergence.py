@@ -99,9 +99,13 @@ LADDERS: dict[str, list[dict[str, Any]]] = {
 }
 #: Contact knobs varied one at a time at the accurate step (each engine's measured levers).
 KNOBS: dict[str, list[dict[str, Any]]] = {
-    "mujoco": [{"noslip_iterations": 20}, {"cone": "pyramidal"}, {"impratio": 1.0},
+    "mujoco": [{"noslip_iterations": 20}, {"cone": "elliptic"}, {"impratio": 1.0},
                {"timeconst_factor": 3.0}, {"timeconst_factor": 4.0},
-               {"integrator": "implicitfast"}, {"multiccd": False}],
+               {"integrator": "implicitfast"}, {"multiccd": False},
+               # the contact damping ratio sets the rebound of a corner that lands inside
+               # the contact (e ~ 1/(4 zeta^2) at tau = 2 dt); 1 was the accurate preset's
+               {"dampratio": 1.0}, {"dampratio": 2.0}, {"dampratio": 4.0},
+               {"dampratio": 1.0, "cone": "elliptic"}],
     "bullet": [{"chamfer_shape": "hull"}, {"contact_breaking_threshold": 1e-3},
                {"friction_anchor": True}, {"solver_iterations": 500},
                {"warm_starting_factor": 0.0}],
@@ -135,17 +139,26 @@ x = 0 and x = +0.07 m. DART (narrow box): box–box.
 0.025 ms: not converged, not adopted). Bullet (narrow box, 0.1 mm breaking
 threshold) converges on the pulses (0.85 / 1.4 / 1.0 % at 10 / 20 / 40 sub-steps) but not
 on the sinusoids (7 / 13 / 34 %); friction anchors, SAT, 500 iterations, no warm start do not
-help. MuJoCo converges on the pulses (≤ 1 % from 0.1 ms) and **not on the sinusoids**: at
-every step from 0.2 to 0.025 ms the 5 Hz / 4 mm sine is 34–43 % low, with 3–7e-4 m of
-interface slip; its contact knobs flip the outcome between two branches (time constant 4 dt
-at 0.1 ms: 2.2 %; the same 0.4 ms time constant at 0.05 ms: 35 %; 3 dt: 13 %; implicitfast
-8 %, and 35 % at 0.05 ms), so no setting is adopted. Drake cannot: SAP 60–69 % on the pulses
+help. MuJoCo with critically damped contacts (ζ = 1, elliptic cone: the former `accurate`)
+converged on the pulses but **not on the sinusoids** (5 Hz / 4 mm 34–43 % low at every step
+from 0.2 to 0.025 ms, 3–7e-4 m of interface slip). The cause: a corner is found one step
+inside the contact, and at τ = 2 dt the contact spring pushes it out at about v/(4ζ²) (a
+rebound e ≈ 0.25 whatever the step): the upper block hopped off its new pivot at every
+interface impact (7.6e-5 m of slip, 1e-4 m of gap in one impact at 0.42 s). ζ = 3 (e ≈ 0.03)
+keeps the corner down: `accurate` is now ζ = 3 with the pyramidal cone (elliptic cones lift
+sliding blocks), 0.7 % / 1.7 %, interface slip < 2e-5 m, same cost. The 4 mm sinusoid then
+stays within 1.1 % at 0.1, 0.05 and 0.025 ms and for ζ from 1.5 to 4; the 2 mm one flips
+between +2 % and −6.5 / +12.7 % with the step, as its own reference does under input
+perturbations (top peak +3.3 % at 1e-6, ±5–6 % at 1e-4, −8.6 / +7.5 % at 1e-3 of the
+amplitude; the 4 mm reference moves < 0.7 % up to 1e-3). 0.2 ms is too coarse (39 %).
+Drake cannot: SAP 60–69 % on the pulses
 at every step from 1 to 0.125 ms and for a 10× stiffer contact (identical results: SAP's
 near-rigid regularisation caps the stiffness); TAMSI 33 %, lagged SAP without the near-rigid
 cap 16 % (sines 42 %), hydroelastic contact 18 % (2 pulses, 34 s CPU each), one slice 30 %.
 The 5 Hz / 4 mm sinusoid is well-posed for the reference but not for engines: every engine at
-0.1 ms departs from it at 0.97 s, all in the same way (pymunk, DART and MuJoCo agree with
-each other there), and small modelling changes pick one of two branches (peaks ~0 % or −35 %).
+0.1 ms departs from it at 0.97 s, all in the same way (pymunk, DART and MuJoCo at ζ = 1 agree
+with each other there; MuJoCo at ζ = 3 does not depart), and small modelling changes pick one
+of two branches (peaks ~0 % or −35 %).
 """
 
 
