@@ -10,6 +10,15 @@ excitation, so the base position follows u_g(t) exactly at the
 step nodes. DART's time stepping is velocity based (semi-implicit Euler with an
 LCP for contacts and friction); restitution and friction are per ``ShapeNode``.
 
+Assemblies (:class:`~rockbench.scenarios.assembly.Assembly`): rectangular blocks are
+boxes and convex prisms triangle meshes of the prism (as for chamfered blocks with
+``chamfer_shape="mesh"``), each at its pose with its full inertia tensor (a
+polygon's x–z product of inertia is not zero); fixed supports are more shapes of the
+base body (a box for an axis-aligned rectangle, else a prism mesh, twice the deepest
+block in depth). DART gives a pair the smaller of its two friction coefficients:
+the blocks carry μ_if and the base μ, which is exact when μ_if ≥ μ; an assembly with
+μ_if < μ is unsupported (its blocks touch each other and the base at once).
+
 Measured pitfalls that this adapter avoids (docs/engine-notes.md): a
 ``PlaneShape`` ground with FCL gives a single contact point (use a box);
 deactivation (sleeping) is on by default (switched off); the restitution of the
@@ -38,6 +47,7 @@ from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.settings import EngineSettings
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import Block, Scenario
+from rockbench.scenarios.assembly import Support
 
 __all__ = ["DartEngine", "DartSettings"]
 
@@ -104,14 +114,15 @@ class DartSettings(EngineSettings):
             raise ValueError(f"timestep must be in (0, 0.05] s, got {self.timestep!r}")
 
 
-def _prism_obj(block: Block, path: str) -> None:
-    """Write the block's convex prism (profile extruded along y) as a Wavefront OBJ.
+def _prism_obj(profile: np.ndarray, depth: float, path: str) -> None:
+    """Write a convex prism (a counter-clockwise x–z ``profile`` extruded over ``depth``
+    along y, centred on y = 0) as a Wavefront OBJ.
 
     Triangles are wound counter-clockwise seen from outside (outward normals),
     which ODE's trimesh collider relies on.
     """
-    prof = np.asarray(block.profile(), float)
-    k, y = len(prof), 0.5 * block.depth
+    prof = np.asarray(profile, float)
+    k, y = len(prof), 0.5 * depth
     lines = [f"v {x:.17g} {-y:.17g} {z:.17g}" for x, z in prof]
     lines += [f"v {x:.17g} {y:.17g} {z:.17g}" for x, z in prof]
     faces = []
@@ -125,8 +136,9 @@ def _prism_obj(block: Block, path: str) -> None:
         fh.write("\n".join(lines) + "\n")
 
 
-def _prism_shape(block: Block) -> Any:
-    """A ``MeshShape`` of the chamfered prism.
+def _prism_shape(profile: np.ndarray, depth: float) -> Any:
+    """A ``MeshShape`` of a convex prism (:func:`_prism_obj`): a chamfered block's, an
+    assembly's polygonal block or support.
 
     dartpy cannot build an Assimp scene from Python, so the prism goes through
     a temporary OBJ file read by DART's URDF loader; the shape keeps the mesh
@@ -134,7 +146,7 @@ def _prism_shape(block: Block) -> Any:
     """
     with tempfile.TemporaryDirectory(prefix="rockbench-dart-") as tmp:
         path = os.path.join(tmp, "prism.obj")
-        _prism_obj(block, path)
+        _prism_obj(profile, depth, path)
         urdf = (
             '<robot name="prism"><link name="prism"><collision><geometry>'
             f'<mesh filename="file://{path}"/></geometry></collision></link></robot>'
@@ -143,7 +155,7 @@ def _prism_shape(block: Block) -> Any:
         skel = dart.utils.DartLoader().parseSkeletonString(
             urdf, dart.common.Uri(f"file://{tmp}/"))
         if skel is None or skel.getNumBodyNodes() == 0:
-            raise UnsupportedScenario("DART could not load the chamfered prism mesh")
+            raise UnsupportedScenario("DART could not load a prism mesh")
         return skel.getBodyNode(0).getShapeNode(0).getShape()
 
 
@@ -157,12 +169,18 @@ def _add_shape(body: Any, shape: Any, friction: float, restitution: float,
     dyn.setRestitutionCoeff(restitution)
 
 
+def _rectangle(support: Support) -> bool:
+    """True if a support is an axis-aligned rectangle (a box)."""
+    v = support.array
+    return len(v) == 4 and all(len(set(col)) == 2 for col in v.T.tolist())
+
+
 class DartEngine(Engine):
     """DART 6 (dartpy): free-joint blocks on a prismatic, velocity-driven box base."""
 
     name: ClassVar[str] = "dart"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
-                                                        chamfer=True)
+                                                        chamfer=True, assemblies=True)
     Settings: ClassVar[type[EngineSettings]] = DartSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {"timestep": 2.5e-5, "collision_detector": "fcl"},
@@ -179,6 +197,15 @@ class DartEngine(Engine):
         return str(getattr(cls.library("dartpy"), "__version__", "unknown"))
 
     # ------------------------------------------------------------------ hooks
+    def _check_supported(self, scenario: Scenario) -> None:
+        c = scenario.contact
+        if scenario.is_assembly and c.block_friction < c.friction:
+            raise UnsupportedScenario(
+                "dart gives a contact the smaller of the two bodies' friction coefficients: "
+                f"block-block joints at μ_if = {c.block_friction:g} below the base's "
+                f"μ = {c.friction:g} cannot both hold in an assembly, whose blocks touch each "
+                "other and the base")
+
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
         s: DartSettings = settings  # type: ignore[assignment]
         chamfered = any(b.chamfer > 0 for b in scenario.blocks)
@@ -188,6 +215,13 @@ class DartEngine(Engine):
                 "DART's own collision detector has no mesh support, so chamfered blocks "
                 "need collision_detector fcl/ode/bullet or chamfer_shape=narrow_box"
             )
+        supports = getattr(scenario.stack, "supports", ())
+        if s.collision_detector == "dart" and (
+                not all(isinstance(b, Block) for b in scenario.blocks)
+                or not all(_rectangle(sup) for sup in supports)):
+            raise UnsupportedScenario(
+                "DART's own collision detector has no mesh support, so an assembly's "
+                "polygonal blocks and supports need collision_detector fcl/ode/bullet")
         dt = float(s.timestep)
         dart = self.library("dartpy")
         world = dart.simulation.World()
@@ -216,7 +250,10 @@ class DartEngine(Engine):
         t_move = min(scenario.duration, exc.end_time) if not exc.is_free else 0.0
         u_max = exc.motion_bounds(scenario.duration)[0]
         span = 4.0 * (scenario.stack.total_height + max(b.width for b in scenario.blocks))
-        span += 2.0 * u_max + float(np.max(np.abs(scenario.stack.offsets)))
+        if scenario.is_assembly:  # wide scenes: the blocks' spread along x too
+            span += 2.0 * u_max + scenario.stack.reach + scenario.stack.size
+        else:
+            span += 2.0 * u_max + float(np.max(np.abs(scenario.stack.offsets)))
         depth = 4.0 * max(b.depth for b in scenario.blocks) + span
         thick = max(0.5, 0.25 * scenario.stack.total_height)
         base = dart.dynamics.Skeleton("base")
@@ -228,23 +265,42 @@ class DartEngine(Engine):
         body.setMass(max(1.0, 100.0 * sum(b.m for b in scenario.blocks)))
         _add_shape(body, dart.dynamics.BoxShape(np.array([2.0 * span, depth, thick])),
                    mu, e_body, (0.0, 0.0, -0.5 * thick))
+        # an assembly's fixed supports: more shapes of the base body (the base is at
+        # x = 0 now, so base coordinates are world coordinates), deeper than any block
+        sup_depth = 2.0 * max(b.depth for b in scenario.blocks)
+        for sup in supports:
+            v = sup.array
+            lo, hi = v.min(axis=0), v.max(axis=0)
+            if _rectangle(sup):
+                _add_shape(body, dart.dynamics.BoxShape(np.array(
+                    [float(hi[0] - lo[0]), sup_depth, float(hi[1] - lo[1])])), mu, e_body,
+                    (0.5 * float(lo[0] + hi[0]), 0.0, 0.5 * float(lo[1] + hi[1])))
+            else:
+                _add_shape(body, _prism_shape(v, sup_depth), mu, e_body)
         world.addSkeleton(base)
 
         # blocks: one skeleton each, free joint at the centroid
         centroids, th0 = scenario.initial_poses()
         self._skels = []
-        for i, blk in enumerate(scenario.blocks):
+        for i, (blk, th) in enumerate(zip(scenario.blocks, th0 + scenario.block_angles,
+                                          strict=True)):
             skel = dart.dynamics.Skeleton(f"block{i}")
             _, bn = skel.createFreeJointAndBodyNodePair()
-            if use_mesh and blk.chamfer > 0:
-                shape = _prism_shape(blk)
-            else:  # plain box, or the chamfered prism's flat faces (narrow_box)
-                w = blk.width - 2.0 * blk.chamfer
-                shape = dart.dynamics.BoxShape(np.array([w, blk.depth, blk.height]))
-            _add_shape(bn, shape, max(mu, mu_if) if i == 0 else mu_if, e_body)
-            bn.setInertia(dart.dynamics.Inertia(blk.m, np.zeros(3), np.diag(blk.inertia)))
-            # FreeJoint coordinates: rotation vector (about +y by θ0), then translation
-            skel.setPositions(np.array([0.0, th0, 0.0, centroids[i, 0], 0.0, centroids[i, 1]]))
+            if not isinstance(blk, Block):  # an assembly's convex prism
+                shape = _prism_shape(blk.profile(), blk.depth)
+                tensor = blk.inertia_tensor  # the x–z product of inertia is not zero
+            else:
+                if use_mesh and blk.chamfer > 0:
+                    shape = _prism_shape(blk.profile(), blk.depth)
+                else:  # plain box, or the chamfered prism's flat faces (narrow_box)
+                    w = blk.width - 2.0 * blk.chamfer
+                    shape = dart.dynamics.BoxShape(np.array([w, blk.depth, blk.height]))
+                tensor = np.diag(blk.inertia)
+            block_mu = mu_if if scenario.is_assembly or i > 0 else max(mu, mu_if)
+            _add_shape(bn, shape, block_mu, e_body)
+            bn.setInertia(dart.dynamics.Inertia(blk.m, np.zeros(3), tensor))
+            # FreeJoint coordinates: rotation vector (about +y by θ), then translation
+            skel.setPositions(np.array([0.0, th, 0.0, centroids[i, 0], 0.0, centroids[i, 1]]))
             skel.setVelocities(np.zeros(6))
             world.addSkeleton(skel)
             self._skels.append(skel)
