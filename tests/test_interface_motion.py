@@ -212,6 +212,10 @@ def test_interface_friction_round_trips_and_leaves_old_files_alone(tmp_path):
 # ---------------------------------------------------------------- engines on interface slip
 #: (engine) → measured reason: upper-block slip error, max |Δs| / max |s_ref|.
 IF_KNOWN = {
+    "bullet": "upper-block slip error 3.2 % with every solver pass run (accurate), growing as "
+              "the step shrinks (5.6 % at 0.05 ms, 7.7 % at 0.025 ms): Bullet's converged "
+              "friction on a mu 0.05 interface does not tend to Coulomb (0.59 % at its early "
+              "exit 1e-7 was not convergence)",
     "drake": "upper-block slip error 18.7 %: it slips 0.0109 m against the exact 0.0119 m",
 }
 
