@@ -62,6 +62,8 @@ JSON-lines file of runs reused on a rerun,
 from __future__ import annotations
 
 import argparse
+import hashlib
+import inspect
 import itertools
 import json
 import math
@@ -330,11 +332,18 @@ class _Runs:
         self.refs = {n: _reference(n) for n in names}
         self.done: dict[tuple[str, str], CaseResult] = {}
         self.timeout = 1800.0
+        # a cached run is reused only for the same resolved knobs (a preset may have moved)
+        # and the same engine source (the engines are edited while studies run)
+        cls = engine_class(engine)
+        self.key = {lab: json.loads(json.dumps(cls.settings(**c).to_dict())) for lab, c in
+                    cands.items()}
+        self.source = hashlib.sha1(Path(inspect.getfile(cls)).read_bytes()).hexdigest()
         if cache is not None and cache.exists():
             for line in cache.read_text().splitlines():
                 r = json.loads(line)
-                if (r["engine"] == engine and r["label"] in cands
-                        and r["settings"] == cands[r["label"]] and r["case"] in self.scen):
+                if (r["engine"] == engine and r["label"] in cands and r["case"] in self.scen
+                        and r.get("resolved") == self.key[r["label"]]
+                        and r.get("source") == self.source):
                     self.done[r["label"], r["case"]] = CaseResult(
                         Status(r["status"]), r["error"], r["peak"], r["cpu"], r["wall"])
 
@@ -356,7 +365,8 @@ class _Runs:
             if self.cache is not None:
                 with self.cache.open("a") as f:
                     f.write(json.dumps(dict(engine=self.engine, label=lab,
-                                            settings=self.cands[lab], case=n,
+                                            settings=self.cands[lab],
+                                            resolved=self.key[lab], source=self.source, case=n,
                                             status=r.status.value, error=r.error, peak=r.peak,
                                             cpu=r.cpu, wall=r.wall)) + "\n")
 
