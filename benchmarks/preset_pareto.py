@@ -125,10 +125,12 @@ GRIDS: dict[str, tuple[tuple[dict[str, Any], ...], ...]] = {
              _axis("collision_detector", "fcl", "ode")),
     "mujoco": (_axis("timestep", 1e-3, 5e-4, 2.5e-4, 2e-4, 1.25e-4, 1e-4),
                _axis("integrator", "Euler", "implicitfast"), _axis("timeconst_factor", 2.0, 4.0),
-               ({}, {"iterations": 50, "tolerance": 1e-8})),
+               ({}, {"iterations": 50, "tolerance": 1e-8}),
+               ({}, {"dampratio": 1.0, "cone": "elliptic"})),  # accurate's contact, fast's
     # dt = 1 / ((substeps + 1) fps), fps 1000
     "bullet": (_axis("substeps", 0, 1, 2, 4, 9), _axis("solver_iterations", 10, 20, 50),
-               ({}, {"chamfer_shape": "hull", "contact_breaking_threshold": 1e-3})),
+               ({}, {"chamfer_shape": "hull", "contact_breaking_threshold": 1e-3,
+                     "solver_residual_threshold": 1e-7})),  # accurate's contact, fast's
     "opensees": (_axis("timestep", 5e-4, 2.5e-4, 1e-4, 5e-5), _axis("contact_frequency",
                                                                       200.0, 500.0, 1000.0),
                  _axis("tolerance", 1e-4, 1e-3)),
