@@ -29,8 +29,11 @@ from engine_helpers import (  # noqa: E402
     check_base_follows_excitation,
     check_paper_stack_under_pulse_runs,
     check_sine_pulse_peak,
+    max_error,
+    zero_crossings,
 )
 
+from rockbench.analytic.housner import single_block_reference  # noqa: E402
 from rockbench.trajectory import Status  # noqa: E402
 
 
@@ -41,6 +44,28 @@ def test_b2_free_rocking_accurate() -> None:
     # a planar engine: no wobble, and θ starts at the requested tilt
     assert np.all(tr.wobble == 0.0)
     assert tr.theta[0, 0] == pytest.approx(0.5 * B2.rocking().lam, rel=1e-12)
+
+
+def test_small_rocking_loses_housners_energy_per_impact() -> None:
+    """B2 from 0.05 λ for 2 s (17 impacts, each at a tenth of the speed of a 0.5 λ swing):
+    θ within 1e-3 λ of Housner's and the first 12 impact times within 0.5 %.
+
+    Measured 2.5e-4 λ and 0.23 %; with the dashpots acting from first contact
+    (``damping_onset=0``) the lifting corner is held back at every impact and the
+    block rocks out 8.6 % early (3.5e-3 λ). Once the reference is at rest the
+    block may keep a residual rocking far below 1e-3 λ (its contact is undamped
+    below the onset).
+    """
+    sc = Scenario("free-b2-small", B2, initial_tilt=0.05, duration=2.0)
+    tr = OpenseesEngine().simulate(sc, "accurate")
+    assert tr.status is Status.OK
+    th = tr.theta[:, 0]
+    assert max_error(sc, th) <= 1e-3
+    ref = single_block_reference(sc)
+    imp = np.asarray(ref.impacts)[:12]
+    np.testing.assert_allclose(zero_crossings(tr.t, th)[:12], imp, rtol=5e-3)
+    rest = ref.extra["rest_time"]
+    assert np.max(np.abs(th[tr.t > rest])) <= 1e-3 * sc.critical_angle
 
 
 def test_b0_impact_times_accurate_and_fast() -> None:
@@ -54,15 +79,19 @@ def test_single_pulse_peak_accurate() -> None:
 
 
 def test_sign_convention_and_mirror_symmetry() -> None:
-    """θ > 0 pivots on the +x corner (centroid toward +x); −tilt mirrors it exactly."""
+    """θ > 0 pivots on the +x corner (centroid toward +x); −tilt mirrors it (to 1e-5 λ)."""
     sc = Scenario("free", B2, initial_tilt=0.5, duration=0.4)
     pos = OpenseesEngine().simulate(sc, "fast")
     neg = OpenseesEngine().simulate(sc.replace(initial_tilt=-0.5), "fast")
     assert pos.status is Status.OK and neg.status is Status.OK
     assert pos.theta[0, 0] > 0 and pos.x[0, 0] > 0
-    np.testing.assert_allclose(neg.theta, -pos.theta, atol=1e-9)
-    np.testing.assert_allclose(neg.x, -pos.x, atol=1e-9)
-    np.testing.assert_allclose(neg.z, pos.z, atol=1e-9)
+    # mirror images to 1e-5 λ, not bit for bit: at the dashpot gate's kink (the onset)
+    # Newton stops at slightly different iterates on the two sides (measured: 1.3e-6 rad
+    # after the first impact, none before it)
+    tol = 1e-5 * sc.critical_angle
+    np.testing.assert_allclose(neg.theta, -pos.theta, atol=tol)
+    np.testing.assert_allclose(neg.x, -pos.x, atol=tol * B2.h)
+    np.testing.assert_allclose(neg.z, pos.z, atol=tol * B2.h)
 
 
 # ---------------------------------------------------------------- base motion
@@ -77,7 +106,9 @@ def test_block_rides_with_the_base_below_uplift() -> None:
     |ü_g| / ω_c² (ω_c = 2π f_c) and the pair of corner springs (rotational
     stiffness m ω_c² b²) tilts the block elastically by |ü_g| h / (ω_c² b²),
     which moves the centroid by h times that. The block starts from the exact
-    static settlement g / ω_c² and keeps it.
+    static settlement g / ω_c² and keeps it. The corners stay below the dashpots'
+    onset, so this elastic response is undamped and may overshoot the quasi-static
+    one, by at most 2× for a linear oscillator (measured: 1.11×).
     """
     lam = SINGLE2.rocking().lam
     f = 3.0
@@ -92,11 +123,11 @@ def test_block_rides_with_the_base_below_uplift() -> None:
     a_max = amp * (2 * math.pi * f) ** 2
     b, h = SINGLE2.pivot_half_width, SINGLE2.h
     tilt = a_max * h / (omega2 * b * b)
-    assert 0.5 * tilt < np.max(np.abs(tr.theta)) <= 1.1 * tilt
+    assert 0.5 * tilt < np.max(np.abs(tr.theta)) <= 2.0 * tilt
     rel = tr.x[:, 0] - exc.displacement(tr.t)
-    assert np.max(np.abs(rel)) <= 1.1 * (a_max / omega2 + h * tilt)
+    assert np.max(np.abs(rel)) <= 2.0 * (a_max / omega2 + h * tilt)
     np.testing.assert_allclose(tr.z[0, 0], SINGLE2.h - sc.g / omega2, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(tr.z[:, 0], tr.z[0, 0], rtol=0, atol=b * tilt)
+    np.testing.assert_allclose(tr.z[:, 0], tr.z[0, 0], rtol=0, atol=2.0 * b * tilt)
 
 
 def test_frictionless_base_slides_under_block() -> None:
@@ -162,8 +193,9 @@ def test_settings_and_presets() -> None:
     assert OpenseesEngine.settings("winkler").springs >= 10  # the literature's minimum
     assert OpenseesEngine.settings("fast").timestep > s.timestep
     assert OpenseesEngine.settings(None, springs="12").springs == 12
+    assert s.damping_onset > 2.0  # above a corner's static compression, 2 g/ω_c²
     for bad in (dict(springs=1), dict(alpha=0.5), dict(timestep=0.0), dict(integrator="rk4"),
-                dict(substeps=3)):
+                dict(substeps=3), dict(rho_inf=1.5), dict(damping_onset=-1.0)):
         with pytest.raises(SettingsError):
             OpenseesEngine.settings(None, **bad)
     assert OpenseesEngine.version().startswith("3.")
@@ -175,9 +207,11 @@ def test_hht_and_timestep_knobs_take_effect() -> None:
     a = OpenseesEngine().simulate(sc, "fast")
     b = OpenseesEngine().simulate(sc, {"preset": "fast", "integrator": "hht", "alpha": 0.8})
     c = OpenseesEngine().simulate(sc, {"preset": "fast", "timestep": 2.5e-4})
+    d = OpenseesEngine().simulate(sc, {"preset": "fast", "integrator": "generalized-alpha",
+                                       "rho_inf": 0.8})
     assert a.settings["effective_timestep"] == pytest.approx(5e-4)
     assert c.settings["effective_timestep"] == pytest.approx(2.5e-4)
-    for other in (b, c):
+    for other in (b, c, d):
         assert other.status is Status.OK
         assert 1e-6 < np.max(np.abs(a.theta - other.theta)) < 0.05 * sc.critical_angle
 
