@@ -258,6 +258,79 @@ def _dem2d(eng: Any, sc: Scenario, dt: float, k: int, poses: np.ndarray) -> None
         sample(n_out - ns - 1, k, dt, *args, eng._still, poses[ns + 1:])
 
 
+# ---------------------------------------------------------------------- OpenSees
+def _opensees(eng: Any, sc: Scenario, dt: float, k: int, poses: np.ndarray) -> None:
+    # the UniformExcitation pattern carries the base acceleration inside ``analyze``: the
+    # driven and the free samples are the same calls (``_fix_base`` is a no-op, as in the
+    # plugin); a step Newton does not converge goes to the plugin's own fallback
+    ops = eng._ops
+    analyze, disp, get_time = ops.analyze, ops.nodeDisp, ops.getTime
+    tags = eng._centroids
+    n_out, nb = poses.shape[0], len(tags)
+    raw = np.empty((n_out, nb, 3))  # ux, uz, r_z; converted at the end
+    raw[0] = [disp(t) for t in tags]
+    step = 0
+    for i in range(1, n_out):
+        target = i * k
+        while step < target:
+            if analyze(target - step, dt) == 0:
+                step = target
+                break
+            step = int(round(get_time() / dt))
+            eng._retry_step(ops, dt)
+            step += 1
+        for b in range(nb):
+            raw[i, b] = disp(tags[b])
+    u = np.asarray(eng._u, float)
+    ub = u[np.minimum(np.arange(n_out) * k, u.size - 1)]
+    half = -0.5 * raw[..., 2]
+    poses[..., 0] = eng._x0 + raw[..., 0] + ub[:, None]
+    poses[..., 1] = 0.0
+    poses[..., 2] = eng._z0 + raw[..., 1]
+    poses[..., 3] = np.cos(half)
+    poses[..., 4] = 0.0
+    poses[..., 5] = np.sin(half)
+    poses[..., 6] = 0.0
+
+
+# ---------------------------------------------------------------------- Blender
+def _blender(eng: Any, sc: Scenario, dt: float, k: int, poses: np.ndarray) -> None:
+    # one physics "step" of the plugin is one Blender frame (its sub-steps inside)
+    frame_set = eng._scene.frame_set
+    mats = [ob.matrix_world for ob in eng._blocks]
+    n_out = poses.shape[0]
+    ns = driven_samples(sc, dt, k)
+    nb = len(mats)
+
+    def read(i: int) -> None:
+        for b in range(nb):
+            m = mats[b]
+            q, p = m.to_quaternion(), m.translation
+            poses[i, b] = (p.x, p.y, p.z, q.w, q.x, q.y, q.z)
+
+    if ns and eng._motor is not None:
+        raise ValueError("the raw blender loop drives a kinematic base only")
+    frame = 1
+    if ns:
+        # the base placed at the end of each frame before Blender steps into it (the
+        # kinematic drive; a motor drive is not covered)
+        loc, update, u = eng._base.location, eng._view_layer.update, eng._u
+        last = len(u) - 1
+        for i in range(1, ns + 1):
+            for _ in range(k):
+                loc.x = u[min(frame, last)]
+                update()
+                frame += 1
+                frame_set(frame)
+            read(i)
+        eng._fix_base()
+    for i in range(ns + 1, n_out):
+        for _ in range(k):
+            frame += 1
+            frame_set(frame)
+        read(i)
+
+
 #: engine name → raw loop (scene built by the plugin's ``_build``).
 RAW_LOOPS: dict[str, Callable[..., None]] = {
     "mujoco": _mujoco,
@@ -266,6 +339,8 @@ RAW_LOOPS: dict[str, Callable[..., None]] = {
     "pymunk": _pymunk,
     "drake": _drake,
     "dem2d": _dem2d,
+    "opensees": _opensees,
+    "blender": _blender,
 }
 #: Extra raw variants that change the driving call (not bit-identical to the adapter).
 RAW_VARIANTS: dict[str, tuple[str, Callable[..., None]]] = {
