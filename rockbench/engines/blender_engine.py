@@ -65,8 +65,8 @@ What Blender really does (measured with bpy 5.0.1, see tests/test_engine_blender
   out-of-plane parts: likely some steps leave the in-plane slip unresisted (pybullet
   with Blender's solver settings creeps 0–10 µm). A GENERIC rigid body constraint from
   the base to each block locking y, roll and yaw (``planar``, on in ``accurate`` and
-  ``fast``) removes it: creep 11 µm, no wobble, B0 0.020 λ over 20 s (Housner's η to
-  0.01 % at the first six impacts).
+  ``fast``) removes it: creep 11 µm, no wobble, B0 0.020–0.022 λ over 20 s (Housner's
+  η to 0.01 % at the first six impacts).
 * **Contact breaking threshold: the remaining floor.** Held in the plane, B0 loses
   about 0.1 % more than η per impact once its amplitude is below 0.25 λ (from the 6th
   impact), where the lifted corner stays within Bullet's contact breaking threshold
@@ -86,22 +86,21 @@ What Blender really does (measured with bpy 5.0.1, see tests/test_engine_blender
 * Blender's matrices are float32: poses carry ~1e-7 relative rounding.
 
 Calibration (``rockbench compare --suite paper-free`` / ``paper-single-pulse`` and
-``benchmarks/calibrate_blender.py``, bpy 5.0.1): ``accurate`` (Δt 0.1 ms, 50 iterations)
-max |θ − θ_ref| ≤ 0.080 λ on B0–B3 over 20 s (B0 0.080; B1–B3 ≤ 0.035), first impacts
-within 0.09 %, the first three within 0.26 % on B0 and up to 2.5 % on B1, pulse peaks
-−0.26 to +0.61 %, ~4 s per 20 s of B0; ``fast`` (Δt 1 ms) ≤ 0.24 λ, impacts up to 22 %
-on B1 at 0.2 λ, pulse peaks −3.2 to −1.0 %; ``paper`` (Δt 0.21 ms) ≤ 0.10 λ, impacts up
-to 8 %, pulse peaks −0.65 to −0.37 %. The project's free-rocking target (0.005 λ) is out
-of reach: on B0 the error stays at 0.08–0.095 λ from Δt 0.1 ms down to 0.01 ms (0.11 λ
-at 0.2 ms); iterations (10–1000), shapes, margins and restitution do not remove it; the
-blocks twist out of plane (yaw up to 0.16 rad) under Blender's friction pyramid; and the
-response is irregular in the knobs (100 iterations instead of 50 put B1's impacts 12 %
-early). Its likely cause is what pybullet showed with its defaults (docs/engine-notes.md):
-Bullet keeps the lifted pivot's contact points while they are within the contact breaking
-threshold, 0.02 × the block's bounding radius (5 cm on B0), which Blender does not expose.
+``benchmarks/calibrate_blender.py``, bpy 5.0.1): ``accurate`` (Δt 0.1 ms, 20 iterations,
+planar) max |θ − θ_ref| ≤ 0.022 λ on B0–B3 over 20 s (B0 0.022, B1–B3 ≤ 0.0017), the
+first three impacts within 0.06 %, pulse peaks −0.14 to +0.68 %; free in 3D (``planar``
+off) the same step gave 0.080 λ (B0; B1–B3 ≤ 0.035) and impacts up to 2.5 % off.
+``fast`` (Δt 1 ms, planar) ≤ 0.087 λ (B0; B1–B3 ≤ 0.013), impacts within 0.53 %, pulse
+peaks −1.3 to +1.1 % (free: 0.24 λ, 22 %, −3.2 %). ``paper`` (Δt 0.21 ms, free) ≤ 0.10 λ,
+impacts up to 8 %, pulse peaks −0.65 to −0.37 %. The project's free-rocking target
+(0.005 λ) is met on B1–B3; B0 stays at 0.020–0.022 λ whatever the step (0.05 ms),
+iterations or split impulse: Bullet's contact breaking threshold (above), out of
+Blender's reach. Results remain irregular in the knobs at the 0.5 % level (50 instead
+of 20 iterations moved one mirrored pulse peak by 0.6 %).
 The paper's two-block stack under the eight pulses (``paper-stack-pulse``, accurate):
-peaks of both blocks −24 to +4 % of the two-block reference (−24 % at 3.3 Hz/4 mm, an
-uplift ratio of 1.12).
+peaks of both blocks −5.9 to +6.0 % of the two-block reference (+6.0 % at 3.3 Hz/4 mm, an
+uplift ratio of 1.12; −5.9 % on the top block at 6.5 Hz/2 mm); free in 3D −14 to +5 %
+(at 50 iterations −24 to +4 %).
 
 The paper's Table 2 study (``rockbench compare --suite paper-sensitivity``, B0), measured
 with free blocks, as the paper's were (the variations start from the first preset: add
@@ -109,10 +108,10 @@ with free blocks, as the paper's were (the variations start from the first prese
 margins 1e-3/1e-5/1e-6 m barely matter (0.08–0.10 λ; margins bit-identical with box
 shapes), a mesh dissipates far too little (0.65 λ, still rocking at 20 s), sub-steps and
 rate matter most: 2 sub-steps at the paper's 240 fps stop B0 at 10.4–10.5 s (the paper:
-10–11 s; Housner: 16.5 s to |θ| < 0.01 λ), at 60 fps at 5.9 s. Held in the plane the
-same variations stop it at 13.5 s and 11.3 s (0.15 λ), and 240 fps × 20 sub-steps at
-16.1 s (0.041 λ; free: 15.3 s, 0.11 λ): much of what the paper attributed to sub-steps
-is the pivot creep, which grows with the step.
+10–11 s; Housner: 16.5 s to |θ| < 0.01 λ), at 60 fps at 5.9 s. Held in the plane (from
+``accurate``) the same variations stop it at 13.6 s and 9.9 s (0.14 and 0.27 λ), and
+240 fps × 20 sub-steps at 16.1 s (0.039 λ; free: 15.2 s, 0.12 λ): much of what the paper
+attributed to sub-steps is the pivot creep, which grows with the step.
 """
 
 from __future__ import annotations
@@ -462,12 +461,16 @@ def _empty_scene(bpy: Any) -> None:
     from a manager thread) crashes with SIGSEGV in ``read_factory_settings`` if its
     parent had imported bpy. There the scene is emptied through the data API instead
     (rigid body world, objects, meshes and collections removed; every setting the
-    build uses is set again by the build).
+    build uses is set again by the build). Rigid body constraints are removed by their
+    operator first: removing the world with them in it crashed such workers (SIGSEGV in
+    ``world_remove``, 4 of 8 planar stack runs of ``paper-stack-pulse``).
     """
     if _BPY_HOME == [os.getpid(), threading.get_ident()]:
         bpy.ops.wm.read_factory_settings(use_empty=True)
         return
     scene = bpy.context.scene
+    for ob in [o for o in bpy.data.objects if o.rigid_body_constraint is not None]:
+        _operator(bpy, scene, ob, bpy.ops.rigidbody.constraint_remove)
     if scene.rigidbody_world is not None:
         bpy.ops.rigidbody.world_remove()
     for ob in list(bpy.data.objects):
