@@ -178,6 +178,8 @@ class Engine(ABC):
     #: global session): the runner then starts a fresh worker process for every run
     #: instead of reusing a warm one (:mod:`rockbench.runner`).
     fresh_process: ClassVar[bool] = False
+    #: The preset the sensitivity study (the paper's Table 2) varies the knobs from.
+    sensitivity_preset: ClassVar[str] = "accurate"
 
     # ------------------------------------------------------------------ public API
     @classmethod

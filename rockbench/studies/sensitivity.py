@@ -223,7 +223,8 @@ def plan_sensitivity(engines: Sequence[str], *,
     engines : sequence of str
         Engine names (the analytic reference is left out).
     base : mapping, optional
-        Per engine, the settings the variations start from (default: ``accurate``).
+        Per engine, the settings the variations start from (default: its
+        ``sensitivity_preset``, ``accurate`` unless the engine says otherwise).
 
     Returns
     -------
@@ -240,7 +241,7 @@ def plan_sensitivity(engines: Sequence[str], *,
         cls = engine_class(eng)
         if cls.capabilities.analytic:
             continue
-        start = dict((base or {}).get(eng, {"preset": "accurate"}))
+        start = dict((base or {}).get(eng, {"preset": cls.sensitivity_preset}))
         for knob in KNOBS:
             plan = map_knob(eng, cls, knob)
             skipped += plan.skipped
