@@ -357,3 +357,33 @@ def test_sensitivity_maps_knobs() -> None:
         [1 / (3 * 60), 1 / (21 * 60), 1 / (201 * 60)])
     shape = by_key["shape"]
     assert not shape.variations and "no collision-shape knob" in shape.skipped[0].reason
+
+
+def test_sensitivity_starts_from_each_engines_own_preset(tmp_path) -> None:
+    import importlib
+    import sys
+    from pathlib import Path
+
+    from rockbench.engines import register, unregister
+    from rockbench.studies.compare import CompareOptions, _plan
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    fault = importlib.import_module("fault_engine").FaultEngine
+
+    class OwnStart(fault):  # like Blender: Table 2 from its paper-like preset
+        name = "own-start"
+        sensitivity_preset = "fast"
+
+    register("own-start", OwnStart)
+    try:
+        opts = CompareOptions(scenarios=[], engines=["own-start", "pymunk"], out=tmp_path,
+                              sensitivity=True)
+        starts = {r.method.engine: r.method.settings.get("preset") for r in _plan(opts)[0]
+                  if r.method.variation}
+        assert starts == {"own-start": "fast", "pymunk": "accurate"}
+        asked = CompareOptions(scenarios=[], engines=["own-start"], out=tmp_path,
+                               sensitivity=True, sensitivity_from="accurate")
+        assert {r.method.settings.get("preset") for r in _plan(asked)[0]
+                if r.method.variation} == {"accurate"}
+    finally:
+        unregister("own-start")

@@ -147,6 +147,8 @@ def execute_compare(args: argparse.Namespace) -> int:
         execution=execution,
         resume=args.resume, db=None if args.no_db else Path(args.db),
         sensitivity=sensitivity,
+        # the Table 2 variations start from the preset asked for, else each engine's own
+        sensitivity_from=presets[0] if (args.preset or args.presets) else None,
         suite=label, command=command_line(args), embed_figures=not args.link_figures,
         ensemble=args.ensemble,
         **({} if args.horizon_members is None else {"horizon_members": args.horizon_members}))

@@ -103,8 +103,8 @@ uplift ratio of 1.12; −5.9 % on the top block at 6.5 Hz/2 mm); free in 3D −1
 (at 50 iterations −24 to +4 %).
 
 The paper's Table 2 study (``rockbench compare --suite paper-sensitivity``, B0), measured
-with free blocks, as the paper's were (the variations start from the first preset: add
-``--set blender.planar=false`` to ``--presets accurate``): iterations 10/100/1000 and
+with free blocks, as the paper's were (the variations start from the ``paper`` preset,
+``sensitivity_preset``, unless ``--presets`` names another): iterations 10/100/1000 and
 margins 1e-3/1e-5/1e-6 m barely matter (0.08–0.10 λ; margins bit-identical with box
 shapes), a mesh dissipates far too little (0.65 λ, still rocking at 20 s), sub-steps and
 rate matter most: 2 sub-steps at the paper's 240 fps stop B0 at 10.4–10.5 s (the paper:

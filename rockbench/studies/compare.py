@@ -87,6 +87,9 @@ class CompareOptions:
         The results store (None: record nothing; ``resume`` then has nothing to read).
     sensitivity : bool
         Also run the Table 2 sensitivity study on B0.
+    sensitivity_from : str or None
+        The preset its variations start from (with ``overrides``); None: each
+        engine's ``sensitivity_preset`` (``accurate``, Blender's ``paper``).
     suite : str
         Suite name (stored with the runs, shown in the report header).
     command : str
@@ -113,6 +116,7 @@ class CompareOptions:
     resume: bool = False
     db: Path | None = None
     sensitivity: bool = False
+    sensitivity_from: str | None = None
     suite: str = ""
     command: str = ""
     embed_figures: bool = True
@@ -209,7 +213,8 @@ def _plan(opts: CompareOptions) -> tuple[list[PlannedRun], list[Method], Scenari
     skipped: list[sens.Skipped] = []
     if opts.sensitivity:
         b0 = sens.sensitivity_scenario()
-        base = {e: {"preset": opts.presets[0], **opts.overrides.get(e, {})} for e in engines}
+        base = {e: {"preset": opts.sensitivity_from or engine_class(e).sensitivity_preset,
+                    **opts.overrides.get(e, {})} for e in engines}
         planned, variations, skipped = sens.plan_sensitivity(engines, base=base)
         if not any(r.method.is_reference and r.scenario.name == b0.name for r in runs):
             runs.append(PlannedRun(b0, Method.reference()))
