@@ -255,8 +255,11 @@ class BlenderEngine(Engine):
     """Bullet inside Blender (``bpy``), stepped frame by frame."""
 
     name: ClassVar[str] = "blender"
-    capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
-                                                         chamfer=True)
+    capabilities: ClassVar[Capabilities] = Capabilities(
+        dimensions=3, max_blocks=None, chamfer=True,
+        no_assemblies=("not built yet: the scene builder places upright blocks and centred stacks "
+                       "only; the same Bullet library builds assemblies through pybullet (--engine "
+                       "bullet)"))
     Settings: ClassVar[type[EngineSettings]] = BlenderSettings
     #: bpy is one global Blender session per process: a fresh worker for every run
     fresh_process: ClassVar[bool] = True

@@ -143,8 +143,9 @@ class Lmgc90Engine(Engine):
     """Rocking blocks in LMGC90 (non-smooth contact dynamics) via compas_lmgc90."""
 
     name: ClassVar[str] = "lmgc90"
-    capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
-                                                        chamfer=True)
+    capabilities: ClassVar[Capabilities] = Capabilities(
+        dimensions=3, max_blocks=None, chamfer=True,
+        no_assemblies=("not built yet: the plugin places upright blocks and centred stacks only"))
     Settings: ClassVar[type[EngineSettings]] = Lmgc90Settings
     presets: ClassVar[dict[str, dict[str, Any]]] = {"accurate": {}, "fast": {"timestep": 1e-3}}
     requires: ClassVar[tuple[str, ...]] = ("compas_lmgc90.solver",)
