@@ -108,21 +108,20 @@ on all blocks (B0 and B1 need ζ ≈ 3.5, B3 ≈ 5 at f_c = 500 Hz, with impact
 times moving by several per cent between neighbouring ζ). Alternatives tried:
 plastic impacts by numerical damping alone (``integrator = "generalized-alpha"``,
 ρ∞ = 0, no dashpots, f_c = 20 kHz, Δt = 0.1 ms) did not converge (16808 of
-36000 steps of B0 taken with fixed iterations, 0.9 λ off); OpenSees's
-``RockingBC`` macroelement (a deformable rocking body; its only damping is
-Rayleigh's) took 32 µs per step at the 10 µs step it needs (about
-650 s of CPU per 20 s case), and at 0.1 ms its first two B0 impacts were −1.0 %
-and +2.2 % off (0.064 λ by 2.3 s; a stiffer body failed to converge), so it is
-not offered.
+36000 steps of B0 taken with fixed iterations, 0.9 λ off).
+
+Alternative element: ``element = "rockingbc"`` (preset ``rockingbc``) replaces
+the springs of a single block by OpenSees's ``RockingBC`` macroelement
+(Avgenakis & Psycharis 2020), a deformable rocking body whose base uplifts
+and impacts without contact springs; its knobs, cost and accuracy are in
+:class:`OpenseesSettings`.
 
 Library notes: the ``openseespy`` 3.8.0.0 wheel needs ``openseespylinux`` 3.8,
 which the package index does not offer for Python 3.11, so pip installs
 3.7.1.2. Its Linux binary bundles ``libblas.so.3`` but does not find it
 (OpenSeesPyDoc issue #319); :meth:`OpenseesEngine.library` loads the bundled
 copy first. OpenSees keeps one global model per process: every build and
-teardown calls ``wipe()``. The wheel also ships the ``RockingBC`` element
-(Avgenakis & Psycharis 2020; see the calibration above for why it is not
-offered). At interpreter exit OpenSees writes "Process 0 Terminating" to the
+teardown calls ``wipe()``. At interpreter exit OpenSees writes "Process 0 Terminating" to the
 C stderr; :func:`_filter_exit_stderr` drops that one line.
 Licence: OpenSeesPy is free for research, education and internal use;
 commercial redistribution needs a licence from its authors.
@@ -137,7 +136,7 @@ import math
 import os
 import re
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any, ClassVar, Literal
 
 import numpy as np
@@ -231,11 +230,21 @@ def _preload_bundled_blas() -> None:
             pass
 
 
+#: Knobs of the interface-spring model only (``element = "springs"``).
+_SPRING_KNOBS = frozenset({"springs", "contact_frequency", "damping_ratio", "damping_onset",
+                           "body_stiffness", "tolerance", "iterations"})
+#: Knobs of the RockingBC model only (``element = "rockingbc"``).
+_ROCKINGBC_KNOBS = frozenset({"rockingbc_strain", "rockingbc_segments", "rockingbc_damping"})
+#: Newton test of the RockingBC model: relative unbalance, iterations (as in its examples).
+_RBC_TEST = ("RelativeNormUnbalance", 1e-10, 100)
+
+
 @dataclass(frozen=True)
 class OpenseesSettings(EngineSettings):
     """Knobs of the opensees engine (defaults = the ``accurate`` preset).
 
-    Presets: ``accurate`` (the defaults), ``fast`` (see
+    Presets: ``accurate`` (the defaults), ``fast``, ``winkler`` and
+    ``rockingbc`` (the RockingBC element, see ``element``; all in
     :attr:`OpenseesEngine.presets`).
 
     Parameters
@@ -276,6 +285,45 @@ class OpenseesSettings(EngineSettings):
         the weight it carries).
     iterations : int
         Newton iterations per step before the fallbacks are tried.
+    element : {"springs", "rockingbc"}
+        ``springs``: the interface-spring model above (all knobs up to
+        ``iterations``). ``rockingbc``: one ``RockingBC`` macroelement
+        (Avgenakis & Psycharis 2020, EESD 49(11)) from the base to the
+        centroid of a single block, which carries the block's mass and
+        inertia. The element is a deformable body of width 2 × pivot
+        half-width and the block's depth whose base is a no-tension elastic
+        half-plane interface discretised in ``rockingbc_segments`` intervals;
+        it uplifts and impacts without springs or dashpots, sliding with the
+        scenario's μ (ν = 0, an elastic material). Its impacts lose energy
+        through Rayleigh damping only. A static gravity stage and, for a
+        tilted start, a pushover of the centroid's rotation to θ0 precede
+        the dynamic run (Newton, relative unbalance 1e-10, ≤ 100 iterations).
+        Stacks, frictionless bases and restitution > 0 are unsupported; the
+        spring knobs must keep their defaults (and the ``rockingbc_*`` knobs
+        theirs with ``springs``). Preset ``rockingbc``: Δt = 10 µs, at which
+        the result no longer depends on the step. Measured (OpenSees 3.7.1,
+        defaults below): B0 from 0.5 λ (θ0 = 0.099 rad) stays within
+        1.8e-3 λ of Housner over 0.3 s and 3.2e-3 λ over 0.4 s, but its first
+        two impacts are −0.97 % and +2.1 % off and it is 0.17 λ off by 3.4 s
+        (Δt = 0.1 ms: the same to 0.006 λ and 0.1 % at a seventh of the
+        cost); B2 from 0.1 λ (0.046 rad) within 1.8e-3 λ up to its first
+        impact (−0.9 %), from 0.5 λ (0.23 rad) 0.058 λ (first impact 5.3 %
+        early, the same with ε0 ten times smaller or no sliding): the element
+        departs from Housner as the rotation grows. Cost 30–45 µs of CPU per
+        step, about 700 s per 20 s case at 10 µs (the springs' ``accurate``:
+        15–25 s). Energy per impact comes from the Rayleigh damping, not
+        calibrated against Housner's η.
+    rockingbc_strain : float
+        Self-weight strain ε0 at the base that sets the body's stiffness:
+        E = m g / (B w ε0) (B: pivot width, w: depth). Smaller is closer to a
+        rigid block but makes Newton fail (10× stiffer at Δt = 0.1 ms did
+        not converge on B0).
+    rockingbc_segments : int
+        Nw, intervals of the element's base interface.
+    rockingbc_damping : float
+        ζ of the model's first (elastic) mode after gravity, given as
+        stiffness-proportional Rayleigh damping on the current tangent,
+        β = 2ζ/ω_1.
     """
 
     timestep: float = 5e-5
@@ -289,6 +337,10 @@ class OpenseesSettings(EngineSettings):
     rho_inf: float = 1.0
     tolerance: float = 1e-4
     iterations: int = 25
+    element: Literal["springs", "rockingbc"] = "springs"
+    rockingbc_strain: float = 5e-6
+    rockingbc_segments: int = 15
+    rockingbc_damping: float = 0.05
 
     def __post_init__(self) -> None:
         for name in ("timestep", "contact_frequency", "body_stiffness", "tolerance"):
@@ -307,6 +359,20 @@ class OpenseesSettings(EngineSettings):
             raise ValueError(f"alpha must be in [2/3, 1], got {self.alpha!r}")
         if not (0.0 <= self.rho_inf <= 1.0):
             raise ValueError(f"rho_inf must be in [0, 1], got {self.rho_inf!r}")
+        if not (math.isfinite(self.rockingbc_strain) and 0 < self.rockingbc_strain < 1e-2):
+            raise ValueError(f"rockingbc_strain must be in (0, 0.01), got "
+                             f"{self.rockingbc_strain!r}")
+        if self.rockingbc_segments < 2:
+            raise ValueError(f"rockingbc_segments must be >= 2, got {self.rockingbc_segments!r}")
+        if not (math.isfinite(self.rockingbc_damping) and self.rockingbc_damping >= 0):
+            raise ValueError(f"rockingbc_damping must be finite and >= 0, got "
+                             f"{self.rockingbc_damping!r}")
+        # a knob of the other model would be silently ignored: refuse it instead
+        unused = _SPRING_KNOBS if self.element == "rockingbc" else _ROCKINGBC_KNOBS
+        changed = [f.name for f in fields(self)
+                   if f.name in unused and getattr(self, f.name) != f.default]
+        if changed:
+            raise ValueError(f"element={self.element!r} does not use {', '.join(changed)}")
 
 
 @dataclass(frozen=True)
@@ -332,6 +398,8 @@ class OpenseesEngine(Engine):
         # the literature's Winkler bed: 10 points per interface (not Housner-calibrated)
         "winkler": {"timestep": 1e-4, "springs": 10, "contact_frequency": 500.0,
                     "damping_ratio": 3.6, "damping_onset": 0.0},
+        # the RockingBC macroelement at the step it needs (figures in the Settings docstring)
+        "rockingbc": {"element": "rockingbc", "timestep": 1e-5},
     }
     extra: ClassVar[str] = "opensees"
     requires: ClassVar[tuple[str, ...]] = (_MODULE,)
@@ -421,13 +489,15 @@ class OpenseesEngine(Engine):
         dt = float(s.timestep)
         ops.wipe()
         ops.logFile(os.devnull, "-noEcho")  # convergence retries are expected, not news
+        if s.element == "rockingbc":
+            return self._build_rockingbc(ops, scenario, s)
         ops.model("basic", "-ndm", 2, "-ndf", 3)
         ops.geomTransf("Corotational", 1)
         frictionless = scenario.contact.friction == 0.0
         if not frictionless:
             ops.frictionModel("Coulomb", 1, float(scenario.contact.friction))
         ops.uniaxialMaterial("Elastic", 1, 0.0)  # no moment at a contact point
-        blocks, nb, g = scenario.blocks, scenario.n_blocks, scenario.g
+        blocks, g = scenario.blocks, scenario.g
         centres = scenario.stack.centroids
         ifaces = self.interfaces(scenario, s)
         omega = 2.0 * math.pi * s.contact_frequency
@@ -479,23 +549,31 @@ class OpenseesEngine(Engine):
             if beta > 0:
                 ops.region(i + 1, "-ele", *dampers, "-rayleigh", 0.0, beta / _EPS_DAMP, 0.0, 0.0)
         self._set_initial_state(ops, scenario, block_nodes, ifaces)
+        self._add_excitation(ops, scenario, dt, 2)
+        ops.constraints("Plain")
+        ops.numberer("RCM")
+        ops.system("BandGeneral")
+        self._test = ("NormDispIncr", float(s.tolerance) * g / omega**2, int(s.iterations))
+        self._start_transient(ops, s, scenario, cnodes)
+        return dt
 
+    def _add_excitation(self, ops: Any, scenario: Scenario, dt: float, tag: int) -> None:
+        """Uniform excitation −m ü_g(t) on every mass (series and pattern ``tag``)."""
         exc = scenario.excitation
         t_end = min(exc.end_time, scenario.duration) if not exc.is_free else 0.0
         n_drive = int(math.ceil(t_end / dt - 1e-9)) + 1 if t_end > 0 else 0
         if n_drive:
             t = np.arange(n_drive + 1) * dt
             acc = np.asarray(exc.acceleration(t), float)
-            ops.timeSeries("Path", 2, "-dt", dt, "-values", *acc.tolist())
-            ops.pattern("UniformExcitation", 2, 1, "-accel", 2)
+            ops.timeSeries("Path", tag, "-dt", dt, "-values", *acc.tolist())
+            ops.pattern("UniformExcitation", tag, 1, "-accel", tag)
             self._u = np.asarray(exc.displacement(t), float)
         else:
             self._u = np.zeros(1)
 
-        ops.constraints("Plain")
-        ops.numberer("RCM")
-        ops.system("BandGeneral")
-        self._test = ("NormDispIncr", float(s.tolerance) * g / omega**2, int(s.iterations))
+    def _start_transient(self, ops: Any, s: OpenseesSettings, scenario: Scenario,
+                         cnodes: list[int]) -> None:
+        """Newton with :attr:`_test`, the chosen integrator, and the run's bookkeeping."""
         ops.test(*self._test)
         ops.algorithm("Newton")
         if s.integrator == "hht":
@@ -507,12 +585,80 @@ class OpenseesEngine(Engine):
         else:
             ops.integrator("Newmark", 0.5, 0.25)
         ops.analysis("Transient")
-        self._ops, self._centroids, self._dt, self._step = ops, cnodes, dt, 0
+        centres = scenario.stack.centroids
+        self._ops, self._centroids, self._dt, self._step = ops, cnodes, float(s.timestep), 0
         self._failed = False
         self.unconverged_steps = 0
         self._x0, self._z0 = centres[:, 0].copy(), centres[:, 1].copy()
-        self._poses = np.zeros((nb, 7))
-        return dt
+        self._poses = np.zeros((scenario.n_blocks, 7))
+
+    def _build_rockingbc(self, ops: Any, scenario: Scenario, s: OpenseesSettings) -> float:
+        """One RockingBC element from the base to the block's centroid (Settings docstring).
+
+        Gravity is applied statically first (the body is deformable), a tilted
+        start is reached by a pushover of the centroid's rotation about the
+        pivot, then the transient analysis starts from rest.
+        """
+        if scenario.n_blocks > 1:
+            raise UnsupportedScenario(
+                "opensees element='rockingbc' models a single block: a block-to-block "
+                "interface would need the lower block's top face as the element's base, a "
+                "stiff beam in series with the deformable RockingBC body, not measured here")
+        mu = float(scenario.contact.friction)
+        if mu == 0.0:  # RockingBC reads μ = 0 as "no sliding", the opposite of frictionless
+            raise UnsupportedScenario("opensees element='rockingbc' cannot model a frictionless "
+                                      "base (the element reads mu = 0 as no sliding)")
+        blk, g = scenario.blocks[0], scenario.g
+        (cx, cz), = scenario.stack.centroids
+        width = 2.0 * blk.pivot_half_width
+        # E from the self-weight strain at the base: m g / (E B w) = ε0
+        young = blk.m * g / (width * blk.depth * s.rockingbc_strain)
+        ops.model("basic", "-ndm", 2, "-ndf", 3)
+        ops.node(1, float(cx), float(scenario.stack.base_z[0]))
+        ops.node(2, float(cx), float(cz))
+        ops.fix(1, 1, 1, 1)
+        ops.mass(2, blk.m, blk.m, float(blk.inertia[1]))
+        # nodes as (centroid, base), as in the probe that measured it; ν = 0; sy = −1e12:
+        # an elastic material (no crushing)
+        ops.element("RockingBC", 1, 2, 1, int(s.rockingbc_segments), young, 0.0, -1e12,
+                    width, float(blk.depth), mu)
+        ops.timeSeries("Linear", 1)
+        ops.pattern("Plain", 1, 1)
+        ops.load(2, 0.0, -blk.m * g, 0.0)
+        ops.constraints("Transformation")
+        ops.numberer("RCM")
+        ops.system("UmfPack")
+        ops.test("EnergyIncr", 1e-10, 100)
+        ops.algorithm("Newton")
+        ops.integrator("LoadControl", 0.1)
+        ops.analysis("Static")
+        ok = ops.analyze(10)
+        ops.loadConst("-time", 0.0)
+        omega1 = math.sqrt(float(ops.eigen(1)[0]))
+        th = scenario.theta0
+        if th != 0.0 and ok == 0:  # push the centroid's rotation to −θ0 (θ = −r_z)
+            ops.timeSeries("Linear", 2)
+            ops.pattern("Plain", 2, 2)
+            ops.load(2, math.copysign(1.0, th), 0.0, 0.0)
+            n_push = 200
+            ops.integrator("DisplacementControl", 2, 3, -th / n_push)
+            ops.analysis("Static")
+            ok = ops.analyze(n_push)
+            ops.remove("loadPattern", 2)
+        ops.setTime(0.0)
+        ops.wipeAnalysis()
+        # stiffness-proportional damping on the current tangent: ζ of the first mode
+        ops.rayleigh(0.0, 2.0 * s.rockingbc_damping / omega1, 0.0, 0.0)
+        self._add_excitation(ops, scenario, float(s.timestep), 3)
+        ops.constraints("Transformation")
+        ops.numberer("RCM")
+        ops.system("UmfPack")
+        self._test = _RBC_TEST
+        self._start_transient(ops, s, scenario, [2])
+        # a static stage that did not converge leaves no valid initial state: the poses
+        # read NaN, which the base class's watchdog reports as unstable
+        self._failed = ok != 0
+        return float(s.timestep)
 
     @staticmethod
     def _beam(ops: Any, tag: int, centre: int, node: int, c: np.ndarray,
