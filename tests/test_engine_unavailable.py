@@ -46,6 +46,7 @@ LIBRARIES = {
     "numba": ("dem2d", "dem"),
     "bpy": ("blender", "blender"),
     "openseespy": ("opensees", "opensees"),
+    "compas_lmgc90": ("lmgc90", "lmgc90"),
 }
 #: blocked in every child (see the module docstring)
 ALWAYS_BLOCKED = "bpy"

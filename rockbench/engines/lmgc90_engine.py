@@ -148,7 +148,7 @@ class Lmgc90Engine(Engine):
         no_assemblies=("not built yet: the plugin places upright blocks and centred stacks only"))
     Settings: ClassVar[type[EngineSettings]] = Lmgc90Settings
     presets: ClassVar[dict[str, dict[str, Any]]] = {"accurate": {}, "fast": {"timestep": 1e-3}}
-    requires: ClassVar[tuple[str, ...]] = ("compas_lmgc90.solver",)
+    requires: ClassVar[tuple[str, ...]] = ("compas_lmgc90",)
     extra: ClassVar[str] = "lmgc90"
     known_failures: ClassVar[dict[str, str]] = {
         "free_rocking": "B2 from 0.5 lambda: 2nd and 3rd impacts 2.3 % and 2.2 % late at "
