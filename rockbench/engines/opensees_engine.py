@@ -136,6 +136,8 @@ import math
 import os
 import re
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, fields
 from typing import Any, ClassVar, Literal
 
@@ -212,6 +214,21 @@ def _register_exit_filter() -> None:
     if not _exit_filter_registered:
         _exit_filter_registered = True
         atexit.register(_filter_exit_stderr)
+
+
+@contextmanager
+def _c_stdout_muted() -> Iterator[None]:
+    """Send the C stdout to /dev/null meanwhile (RockingBC prints its state changes there)."""
+    sys.stdout.flush()
+    saved, null = os.dup(1), os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        yield
+    finally:
+        ctypes.CDLL(None).fflush(None)  # what the element left in stdio's buffer goes too
+        os.dup2(saved, 1)
+        os.close(saved)
+        os.close(null)
 
 
 def _preload_bundled_blas() -> None:
@@ -303,21 +320,23 @@ class OpenseesSettings(EngineSettings):
         theirs with ``springs``). Preset ``rockingbc``: Δt = 10 µs, at which
         the result no longer depends on the step. Measured (OpenSees 3.7.1,
         defaults below): B0 from 0.5 λ (θ0 = 0.099 rad) stays within
-        1.8e-3 λ of Housner over 0.3 s and 3.2e-3 λ over 0.4 s, but its first
-        two impacts are −0.97 % and +2.1 % off and it is 0.17 λ off by 3.4 s
-        (Δt = 0.1 ms: the same to 0.006 λ and 0.1 % at a seventh of the
-        cost); B2 from 0.1 λ (0.046 rad) within 1.8e-3 λ up to its first
-        impact (−0.9 %), from 0.5 λ (0.23 rad) 0.058 λ (first impact 5.3 %
-        early, the same with ε0 ten times smaller or no sliding): the element
-        departs from Housner as the rotation grows. Cost 30–45 µs of CPU per
-        step, about 700 s per 20 s case at 10 µs (the springs' ``accurate``:
-        15–25 s). Energy per impact comes from the Rayleigh damping, not
-        calibrated against Housner's η.
+        1.8e-3 λ of Housner over 0.3 s, 3.2e-3 λ over 0.4 s and 0.011 λ up
+        to its first impact, but its first two impacts are −0.97 % and
+        +2.1 % off and it is 0.17 λ off by 3.4 s. B2 from 0.1 λ (0.046 rad)
+        stays within 1.8e-3 λ up to its first impact (−0.9 %); from 0.5 λ
+        (0.23 rad) it is 0.058 λ off there (first impact 5.3 % early, the
+        same with ε0 ten times smaller or no sliding): the element departs
+        from Housner as the rotation grows. Cost at 10 µs: 34 µs of CPU per
+        step on B0 (44 on B2), about 700 s per 20 s case (the springs'
+        ``accurate``: 15–25 s). Δt = 0.1 ms gives the same to 0.006 λ and
+        0.1 % in impact time on B0 over 3.4 s at a seventh of the cost.
+        Energy per impact comes from the Rayleigh damping, not calibrated
+        against Housner's η.
     rockingbc_strain : float
         Self-weight strain ε0 at the base that sets the body's stiffness:
         E = m g / (B w ε0) (B: pivot width, w: depth). Smaller is closer to a
-        rigid block but makes Newton fail (10× stiffer at Δt = 0.1 ms did
-        not converge on B0).
+        rigid block but harder for Newton (ε0 = 5e-7 on B0 at Δt = 0.1 ms
+        did not converge; on B2 at 10 µs it did, with the same result).
     rockingbc_segments : int
         Nw, intervals of the element's base interface.
     rockingbc_damping : float
@@ -417,6 +436,7 @@ class OpenseesEngine(Engine):
         self._algorithm: tuple[Any, ...] = ("Newton",)
         self._test: tuple[Any, ...] = ()
         self._failed = False
+        self._mute = False
         #: Where the base ended (m) at teardown, for the benchmarks and tests.
         self.base_end = math.nan
         #: Steps of the last run taken with fixed Newton iterations (see _retry_step).
@@ -588,6 +608,7 @@ class OpenseesEngine(Engine):
         centres = scenario.stack.centroids
         self._ops, self._centroids, self._dt, self._step = ops, cnodes, float(s.timestep), 0
         self._failed = False
+        self._mute = s.element == "rockingbc"
         self.unconverged_steps = 0
         self._x0, self._z0 = centres[:, 0].copy(), centres[:, 1].copy()
         self._poses = np.zeros((scenario.n_blocks, 7))
@@ -632,7 +653,8 @@ class OpenseesEngine(Engine):
         ops.algorithm("Newton")
         ops.integrator("LoadControl", 0.1)
         ops.analysis("Static")
-        ok = ops.analyze(10)
+        with _c_stdout_muted():
+            ok = ops.analyze(10)
         ops.loadConst("-time", 0.0)
         omega1 = math.sqrt(float(ops.eigen(1)[0]))
         th = scenario.theta0
@@ -643,7 +665,8 @@ class OpenseesEngine(Engine):
             n_push = 200
             ops.integrator("DisplacementControl", 2, 3, -th / n_push)
             ops.analysis("Static")
-            ok = ops.analyze(n_push)
+            with _c_stdout_muted():
+                ok = ops.analyze(n_push)
             ops.remove("loadPattern", 2)
         ops.setTime(0.0)
         ops.wipeAnalysis()
@@ -709,6 +732,10 @@ class OpenseesEngine(Engine):
         return True
 
     def _advance(self, n: int) -> None:
+        with _c_stdout_muted() if self._mute else nullcontext():
+            self._advance_steps(n)
+
+    def _advance_steps(self, n: int) -> None:
         ops, dt = self._ops, self._dt
         target = self._step + n
         while self._step < target and not self._failed:
