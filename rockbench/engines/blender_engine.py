@@ -102,16 +102,17 @@ peaks of both blocks −5.9 to +6.0 % of the two-block reference (+6.0 % at 3.3 
 uplift ratio of 1.12; −5.9 % on the top block at 6.5 Hz/2 mm); free in 3D −14 to +5 %
 (at 50 iterations −24 to +4 %).
 
-The paper's Table 2 study (``rockbench compare --suite paper-sensitivity``, B0), measured
-with free blocks, as the paper's were (the variations start from the ``paper`` preset,
-``sensitivity_preset``, unless ``--presets`` names another): iterations 10/100/1000 and
-margins 1e-3/1e-5/1e-6 m barely matter (0.08–0.10 λ; margins bit-identical with box
-shapes), a mesh dissipates far too little (0.65 λ, still rocking at 20 s), sub-steps and
-rate matter most: 2 sub-steps at the paper's 240 fps stop B0 at 10.4–10.5 s (the paper:
-10–11 s; Housner: 16.5 s to |θ| < 0.01 λ), at 60 fps at 5.9 s. Held in the plane (from
-``accurate``) the same variations stop it at 13.6 s and 9.9 s (0.14 and 0.27 λ), and
-240 fps × 20 sub-steps at 16.1 s (0.039 λ; free: 15.2 s, 0.12 λ): much of what the paper
-attributed to sub-steps is the pivot creep, which grows with the step.
+The paper's Table 2 study (``rockbench compare --suite paper-sensitivity``, B0) varies
+the ``paper`` preset (``sensitivity_preset``: 240 fps, 20 sub-steps, 100 iterations, split
+impulse off as in Blender, free blocks) unless ``--presets`` names another. Measured
+(session 4): iterations 10/100/1000 and margins 1e-3/1e-5/1e-6 m barely matter (0.10–0.13
+λ; margins bit-identical with box shapes), a mesh dissipates far too little (0.65 λ, still
+rocking at 20 s), sub-steps and rate matter most: the baseline stops B0 at 15.3 s (Housner:
+16.5 s to |θ| < 0.01 λ), 2 sub-steps at 5.3 s, 200 at 16.0 s; 10 fps at 8.0 s, 50 fps at
+12.7 s. The paper saw 2 sub-steps stop it at 10–11 s; with split impulse on (and 50
+iterations) 2 sub-steps at 240 fps stop it at 10.4 s. Held in the plane (from ``accurate``)
+the same variations stop it at 9.9 s: part of what the paper attributed to sub-steps is the
+pivot creep, which grows with the step.
 """
 
 from __future__ import annotations
