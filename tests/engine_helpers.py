@@ -14,6 +14,7 @@ import pytest
 from rockbench.analytic.housner import single_block_reference
 from rockbench.engines import Engine
 from rockbench.scenarios import Block, Scenario, SinePulse, Stack
+from rockbench.scenarios.assembly import Assembly, Prism, Support, rotate
 from rockbench.trajectory import Status, Trajectory
 
 B0 = Block(1.0, 0.2, 5.0, mass=1.0)
@@ -100,3 +101,22 @@ def check_paper_stack_under_pulse_runs(engine: Engine) -> None:
     assert np.all(np.isfinite(tr.theta))
     # both blocks travel with the base (displacement 2πA after the pulse)
     np.testing.assert_allclose(tr.x[-1] - tr.x[0], 2 * math.pi * 0.004, atol=5e-3)
+
+
+def inclined_scene(prism: bool, excitation: SinePulse | None = None) -> Scenario:
+    """A block at 0.1 rad on a support whose top face slopes at that angle: placed as a
+    Block turned by 0.1 rad, or as a Prism whose vertices are the turned rectangle (pose
+    angle 0, a non-zero product of inertia: an engine must place its body frame turned)."""
+    th, h = 0.1, 0.6
+    top0, top1 = 0.3, 0.3 - 0.8 * math.tan(th)
+    sup = Support(((-0.4, 0.0), (0.4, 0.0), (0.4, top1), (-0.4, top0)))
+    c = np.array([0.0, 0.5 * (top0 + top1)]) + 0.5 * h * np.array([math.sin(th), math.cos(th)])
+    blk = Block(0.3, 0.3, h, density=2000.0)
+    if prism:
+        verts = c + rotate(blk.profile(), th)
+        asm = Assembly((Prism(tuple(map(tuple, verts.tolist())), 0.3, density=2000.0),),
+                       ((0.0, 0.0, 0.0),), (sup,))
+    else:
+        asm = Assembly((blk,), ((float(c[0]), float(c[1]), th),), (sup,))
+    kw = {} if excitation is None else {"excitation": excitation}
+    return Scenario(name="inclined", stack=asm, duration=1.5, output_rate=200.0, **kw)

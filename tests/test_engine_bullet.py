@@ -9,7 +9,7 @@ import pytest
 
 pytest.importorskip("pybullet")
 
-from engine_helpers import zero_crossings  # noqa: E402
+from engine_helpers import inclined_scene, zero_crossings  # noqa: E402
 
 from rockbench.analytic.housner import single_block_reference  # noqa: E402
 from rockbench.engines import SettingsError, get_engine  # noqa: E402
@@ -21,7 +21,7 @@ from rockbench.engines.bullet_engine import (  # noqa: E402
 from rockbench.metrics import impact_times  # noqa: E402
 from rockbench.runner import ExecutionOptions  # noqa: E402
 from rockbench.scenarios import Block, Contact, Scenario, SinePulse, get_scenario  # noqa: E402
-from rockbench.scenarios.assembly import Assembly, Prism, Support, rotate  # noqa: E402
+from rockbench.scenarios.assembly import Prism  # noqa: E402
 from rockbench.studies.tilting import quasi_static, tilting_table  # noqa: E402
 from rockbench.trajectory import Status  # noqa: E402
 
@@ -204,36 +204,18 @@ def test_principal_frame_of_an_isosceles_right_triangle() -> None:
     assert moments[1] == pytest.approx(tri.inertia_tensor[1, 1], rel=1e-15)
 
 
-def _inclined(prism: bool, excitation: SinePulse | None = None) -> Scenario:
-    """A block at 0.1 rad on a support whose top face slopes at that angle: placed as a
-    Block turned by 0.1 rad, or as a Prism whose vertices are the turned rectangle
-    (pose angle 0, a non-zero product of inertia: its body frame is turned by φ)."""
-    th, h = 0.1, 0.6
-    top0, top1 = 0.3, 0.3 - 0.8 * math.tan(th)
-    sup = Support(((-0.4, 0.0), (0.4, 0.0), (0.4, top1), (-0.4, top0)))
-    c = np.array([0.0, 0.5 * (top0 + top1)]) + 0.5 * h * np.array([math.sin(th), math.cos(th)])
-    blk = Block(0.3, 0.3, h, density=2000.0)
-    if prism:
-        verts = c + rotate(blk.profile(), th)
-        asm = Assembly((Prism(tuple(map(tuple, verts.tolist())), 0.3, density=2000.0),),
-                       ((0.0, 0.0, 0.0),), (sup,))
-    else:
-        asm = Assembly((blk,), ((float(c[0]), float(c[1]), th),), (sup,))
-    kw = {} if excitation is None else {"excitation": excitation}
-    return Scenario(name="inclined", stack=asm, duration=1.5, output_rate=200.0, **kw)
-
-
 def test_prism_in_its_principal_frame_reads_back_its_own_pose(engine: BulletEngine) -> None:
-    block, prism = engine.simulate(_inclined(False)), engine.simulate(_inclined(True))
+    block, prism = engine.simulate(inclined_scene(False)), engine.simulate(inclined_scene(True))
     assert block.status is prism.status is Status.OK
-    assert abs(principal_frame(_inclined(True).blocks[0].inertia_tensor)[0]) > 0.05
+    assert abs(principal_frame(inclined_scene(True).blocks[0].inertia_tensor)[0]) > 0.05
     # at rest on the slope: the block at 0.1 rad, the prism at its pose angle 0, both still
     assert np.max(np.abs(block.theta - 0.1)) < 1e-4
     assert np.max(np.abs(prism.theta)) < 1e-4
     assert np.max(np.abs(prism.x - block.x)) < 1e-5 and np.max(np.abs(prism.z - block.z)) < 1e-5
     # rocked by a pulse (box and hull collide differently: a few % apart)
     pulse = SinePulse(2.0, 0.04)
-    rb, rp = engine.simulate(_inclined(False, pulse)), engine.simulate(_inclined(True, pulse))
+    rb = engine.simulate(inclined_scene(False, pulse))
+    rp = engine.simulate(inclined_scene(True, pulse))
     peak_b, peak_p = np.max(np.abs(rb.theta - 0.1)), np.max(np.abs(rp.theta))
     assert peak_b > 0.05 and peak_p == pytest.approx(peak_b, rel=0.1)
 

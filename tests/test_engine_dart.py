@@ -9,7 +9,7 @@ import pytest
 
 pytest.importorskip("dartpy")
 
-from engine_helpers import B0, B2, PAPER_STACK, SINGLE2, zero_crossings  # noqa: E402
+from engine_helpers import B0, B2, PAPER_STACK, SINGLE2, inclined_scene, zero_crossings  # noqa: E402, E501
 
 from rockbench.analytic.housner import single_block_reference  # noqa: E402
 from rockbench.engines.dart_engine import DartEngine, DartSettings, _prism_obj  # noqa: E402
@@ -23,7 +23,7 @@ from rockbench.scenarios import (  # noqa: E402
     Stack,
     get_scenario,
 )
-from rockbench.scenarios.assembly import Assembly, Prism, Support, rotate  # noqa: E402
+from rockbench.scenarios.assembly import Assembly, Support  # noqa: E402
 from rockbench.studies.tilting import quasi_static, tilting_table  # noqa: E402
 from rockbench.trajectory import Status  # noqa: E402
 
@@ -197,36 +197,17 @@ def test_assemblies_of_boxes_stay_at_rest() -> None:
         assert turn < 1e-4 and drift < 2e-5, f"{name}: turn {turn:.2e} λ, drift {drift:.2e} m"
 
 
-def _inclined(prism: bool, excitation: SinePulse | None = None) -> Scenario:
-    """A block at 0.1 rad on a support whose top face slopes at that angle (a mesh
-    support): placed as a Block turned by 0.1 rad, or as a Prism (a mesh with a full
-    inertia tensor) whose vertices are the turned rectangle, at pose angle 0."""
-    th, h = 0.1, 0.6
-    top0, top1 = 0.3, 0.3 - 0.8 * math.tan(th)
-    sup = Support(((-0.4, 0.0), (0.4, 0.0), (0.4, top1), (-0.4, top0)))
-    c = np.array([0.0, 0.5 * (top0 + top1)]) + 0.5 * h * np.array([math.sin(th), math.cos(th)])
-    blk = Block(0.3, 0.3, h, density=2000.0)
-    if prism:
-        verts = c + rotate(blk.profile(), th)
-        asm = Assembly((Prism(tuple(map(tuple, verts.tolist())), 0.3, density=2000.0),),
-                       ((0.0, 0.0, 0.0),), (sup,))
-    else:
-        asm = Assembly((blk,), ((float(c[0]), float(c[1]), th),), (sup,))
-    kw = {} if excitation is None else {"excitation": excitation}
-    return Scenario(name="inclined", stack=asm, duration=1.5, output_rate=200.0, **kw)
-
-
 def test_prism_reads_back_its_own_pose_and_rocks_like_the_block() -> None:
     eng = DartEngine()
-    block, prism = eng.simulate(_inclined(False), "single"), eng.simulate(_inclined(True),
+    block, prism = eng.simulate(inclined_scene(False), "single"), eng.simulate(inclined_scene(True),
                                                                            "single")
     assert block.status is prism.status is Status.OK
     assert np.max(np.abs(block.theta - 0.1)) < 1e-4 and np.max(np.abs(prism.theta)) < 1e-4
     assert np.max(np.abs(prism.x - block.x)) < 1e-5 and np.max(np.abs(prism.z - block.z)) < 1e-5
     # rocked by a pulse on the moving (mesh) support: peaks measured 0.05 % apart
     pulse = SinePulse(2.0, 0.04)
-    rb = eng.simulate(_inclined(False, pulse), "single")
-    rp = eng.simulate(_inclined(True, pulse), "single")
+    rb = eng.simulate(inclined_scene(False, pulse), "single")
+    rp = eng.simulate(inclined_scene(True, pulse), "single")
     peak_b, peak_p = np.max(np.abs(rb.theta - 0.1)), np.max(np.abs(rp.theta))
     assert peak_b > 0.05 and peak_p == pytest.approx(peak_b, rel=0.01)
 
