@@ -558,7 +558,9 @@ def map_tasks(
                 i = waiting.popleft()
                 running[schedule(i)] = i
             ready, _ = wait(running, return_when=FIRST_COMPLETED)
-            for fut in ready:
+            # several may be done at once (a queued task runs without this loop): in
+            # dispatch order, not the set's
+            for fut in [f for f in running if f in ready]:
                 i = running.pop(fut)
                 queued[group(i)] -= 1
                 try:

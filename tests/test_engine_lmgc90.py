@@ -31,7 +31,7 @@ def test_unavailable_without_the_binding(monkeypatch: pytest.MonkeyPatch) -> Non
 
 
 def test_presets_and_knobs() -> None:
-    assert Lmgc90Engine.requires == ("compas_lmgc90.solver",)
+    assert Lmgc90Engine.requires == ("compas_lmgc90",)
     assert Lmgc90Engine.extra == "lmgc90"
     assert Lmgc90Engine.settings("accurate") == Lmgc90Settings()
     assert Lmgc90Engine.settings("fast").timestep == pytest.approx(1e-3)
