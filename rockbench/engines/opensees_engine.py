@@ -407,8 +407,10 @@ class OpenseesEngine(Engine):
     """Rigid blocks on compression-only friction springs in OpenSees (planar, implicit)."""
 
     name: ClassVar[str] = "opensees"
-    capabilities: ClassVar[Capabilities] = Capabilities(dimensions=2, max_blocks=None,
-                                                        chamfer=True)
+    capabilities: ClassVar[Capabilities] = Capabilities(
+        dimensions=2, max_blocks=None, chamfer=True,
+        no_assemblies=("not built yet: the interface springs are laid on the horizontal bed "
+                       "joints of upright blocks and centred stacks only"))
     Settings: ClassVar[type[EngineSettings]] = OpenseesSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
