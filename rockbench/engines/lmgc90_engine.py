@@ -172,8 +172,10 @@ class Lmgc90Engine(Engine):
 
     @classmethod
     def check_available(cls) -> None:
-        """The binding imports and exports LMGC90's face-to-face tolerance setter."""
+        """The binding and its compiled solver import, and export LMGC90's face-to-face
+        tolerance setter."""
         super().check_available()
+        cls.library("compas_lmgc90.solver")
         _f2f_tol_setter()
 
     @classmethod
