@@ -397,9 +397,7 @@ def cost_hint(job: Job) -> float:
     """
     sc = job.scenario
     try:
-        step = getattr(engine_class(job.engine).settings(
-            job.settings.get("preset"), **{k: v for k, v in job.settings.items()
-                                          if k != "preset"}), "timestep", None)
+        step = getattr(engine_class(job.engine).resolve_settings(job.settings), "timestep", None)
     except (RockbenchError, TypeError):
         return 0.0
     if not isinstance(step, float) or not step > 0:
@@ -521,7 +519,6 @@ def map_tasks(
     memory = ex.worker_memory_bytes()
 
     workers: dict[WorkerGroup, int] = {}  # the workers of each group's pool
-    queued: Counter[WorkerGroup] = Counter()  # each group's tasks handed to its pool, not done
 
     def schedule(i: int) -> Any:
         g = group(i)
@@ -532,7 +529,6 @@ def map_tasks(
                                    initializer=_init_worker, initargs=(os.getpid(), memory))
         fut = pools[g].schedule(fn, args=(tasks[i],), timeout=limit(i))
         left[g] -= 1
-        queued[g] += 1
         if not left[g]:
             pools[g].close()  # its workers end when their last task is done
         return fut
@@ -544,6 +540,7 @@ def map_tasks(
         # short runs). Pebble counts a time limit from the task's start, not from here.
         g = group(i)
         n = workers.get(g, min(ex.jobs, left[g]))
+        queued = Counter(group(k) for k in running.values())  # handed to a pool, not done
         if queued[g] >= n:
             return queued[g] < 2 * n
         return sum(min(q, workers[h]) for h, q in queued.items()) < ex.jobs
@@ -562,7 +559,6 @@ def map_tasks(
             # dispatch order, not the set's
             for fut in [f for f in running if f in ready]:
                 i = running.pop(fut)
-                queued[group(i)] -= 1
                 try:
                     value = fut.result()
                 except FutureTimeout:

@@ -227,18 +227,19 @@ class Engine(ABC):
                 raise SettingsError(f"{cls.name}.{text}") from None
             raise
 
-    def resolve_settings(self, settings: Any = None) -> EngineSettings:
+    @classmethod
+    def resolve_settings(cls, settings: Any = None) -> EngineSettings:
         """Accept None, a preset name, a mapping of overrides or a Settings instance."""
         if settings is None or isinstance(settings, str):
-            return self.settings(settings)
-        if isinstance(settings, self.Settings):
+            return cls.settings(settings)
+        if isinstance(settings, cls.Settings):
             return settings
         if isinstance(settings, Mapping):
             s = dict(settings)
-            return self.settings(s.pop("preset", None), **s)
+            return cls.settings(s.pop("preset", None), **s)
         raise SettingsError(
-            f"settings for {self.name!r} must be a preset name, a mapping or "
-            f"{self.Settings.__qualname__}, got {type(settings).__name__}"
+            f"settings for {cls.name!r} must be a preset name, a mapping or "
+            f"{cls.Settings.__qualname__}, got {type(settings).__name__}"
         )
 
     def check_supported(self, scenario: Scenario) -> None:

@@ -247,8 +247,7 @@ def plan_sensitivity(engines: Sequence[str], *,
             skipped += plan.skipped
             for v in plan.variations:
                 settings = {**start, **v.overrides}
-                cls.settings(settings.get("preset"),
-                             **{k: x for k, x in settings.items() if k != "preset"})
+                cls.resolve_settings(settings)  # a bad override fails here, before any run
                 methods.append(Method.of(eng, settings, variation=v.label))
                 variations.append(v)
     return methods, variations, skipped
