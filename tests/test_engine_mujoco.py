@@ -124,9 +124,11 @@ def test_restitution_maps_to_dampratio() -> None:
     # the linear oscillator with that damping ratio bounces back with e = 0.5
     assert math.exp(-z * math.pi / math.sqrt(1 - z * z)) == pytest.approx(0.5)
     sc = Scenario("bouncy", B2, Contact(1.0, 0.5), initial_tilt=0.5)
-    xml = MujocoEngine().mjcf(sc, MujocoEngine.settings("fast"))
-    model = mujoco.MjModel.from_xml_string(xml)
-    np.testing.assert_allclose(model.geom_solref, [[4e-3, z]] * model.ngeom)
+    s = MujocoEngine.settings("fast")
+    model = mujoco.MjModel.from_xml_string(MujocoEngine().mjcf(sc, s))
+    # time constant τ = timeconst_factor · dt (2 ms at fast), damping ratio from e
+    np.testing.assert_allclose(model.geom_solref, [[2e-3, z]] * model.ngeom)
+    assert s.timeconst_factor * s.timestep == pytest.approx(2e-3)
 
 
 def test_unsupported_near_elastic() -> None:
