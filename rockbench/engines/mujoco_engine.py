@@ -117,12 +117,13 @@ class MujocoSettings(EngineSettings):
     -----
     Calibrated with ``benchmarks/calibrate_mujoco.py`` (free rocking B0–B3, six
     sine pulses): ``accurate`` (dt 0.1 ms, τ = 2 dt, ζ = 3, pyramidal cone) stays
-    below 1.8e-3 λ and 0.10 % on pulse peaks; ``fast`` (the same contact at dt 1 ms) stays
-    below 0.02 λ on free rocking, 0.086 λ and 0.85 % on the pulses and 9.2 % on the
-    stack pulses' peaks (the former fast, τ = 4 dt, ζ = 1, elliptic cone: 0.031 λ,
-    0.11 λ, 1.1 % and 21 %, at 1.24× the cost; ``benchmarks/preset_pareto.py``). On the paper's stack (``benchmarks/stack_convergence.py``)
-    ``accurate`` keeps both peaks of every stack pulse within 0.7 % and of the two
-    well-posed sinusoids within 1.7 %, with < 2e-5 m of interface slip.
+    below 1.8e-3 λ and 0.10 % on pulse peaks; ``fast`` (the same contact at dt 1 ms)
+    stays within 0.020 λ on free rocking, 0.086 λ and 0.85 % on the pulses and 9.2 % on
+    the stack pulses' peaks (the former fast, τ = 4 dt, ζ = 1, elliptic cone: 0.031 λ,
+    0.11 λ, 1.1 % and 21 %, at 1.24× the cost; ``benchmarks/preset_pareto.py``). On the
+    paper's stack (``benchmarks/stack_convergence.py``) ``accurate`` keeps both peaks
+    of every stack pulse within 0.7 % and of the two well-posed sinusoids within 1.7 %,
+    with < 2e-5 m of interface slip.
     """
 
     timestep: float = 1.0e-4
