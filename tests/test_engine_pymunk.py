@@ -13,9 +13,11 @@ pymunk = pytest.importorskip("pymunk")
 from engine_helpers import B0, B2, PAPER_STACK, SINGLE2, zero_crossings  # noqa: E402
 
 from rockbench.analytic.housner import single_block_reference  # noqa: E402
+from rockbench.analytic.sliding import solve_sliding  # noqa: E402
 from rockbench.engines.pymunk_engine import PymunkEngine, PymunkSettings  # noqa: E402
 from rockbench.engines.settings import SettingsError  # noqa: E402
 from rockbench.scenarios import Block, Contact, Scenario, SinePulse  # noqa: E402
+from rockbench.scenarios.assembly import Assembly  # noqa: E402
 from rockbench.trajectory import Status  # noqa: E402
 
 
@@ -191,3 +193,39 @@ def test_unknown_out_of_plane_content_is_unsupported() -> None:
     # the same field at its planar (zero) value is fine
     ok = _OffsetBlock(0.5, 0.2, 1.0, mass=1.0)
     assert PymunkEngine().simulate(free(ok, 0.5, 0.1), "fast").status is Status.OK
+
+
+# ---------------------------------------------------------------- assemblies
+def _side_by_side(mu: float, mu_if: float, peak_g: float) -> Scenario:
+    """Two squat blocks (b/h = 2: they cannot rock below 2 g) touching side by side on the
+    base, under a 2 Hz one-sine pulse of peak acceleration ``peak_g`` · g."""
+    blk = Block(0.4, 0.3, 0.2, density=2000.0)
+    amp = peak_g * 9.81 / (2 * math.pi * 2.0) ** 2
+    asm = Assembly((blk, blk), ((-0.2, 0.1, 0.0), (0.2, 0.1, 0.0)), ())
+    return Scenario(name="side-by-side", stack=asm, contact=Contact(mu, interface_friction=mu_if),
+                    excitation=SinePulse(2.0, amp), duration=0.8, output_rate=200.0)
+
+
+@pytest.mark.parametrize("mu_if", [0.5, 0.1])
+def test_every_block_of_an_assembly_has_the_base_friction(mu_if: float) -> None:
+    # both blocks stand on the base (μ = 0.3) at 0.2 g: neither may slide, whatever the
+    # friction between them. A stack's alternation (blocks √-free, 1 and μ_if in turn)
+    # would give the second block μ·μ_if on the base (0.15 or 0.03) and let it slide.
+    sc = _side_by_side(0.3, mu_if, 0.2)
+    tr = PymunkEngine().simulate(sc, "accurate")
+    assert tr.status is Status.OK, tr.message
+    base = 2 * math.pi * sc.excitation.amplitude
+    np.testing.assert_allclose(tr.x[-1] - tr.x[0], [base, base], atol=2e-5)
+    # at 0.5 g on μ = 0.15 both slide, together, as the exact Coulomb slider does
+    sc = _side_by_side(0.15, mu_if, 0.5)
+    tr = PymunkEngine().simulate(sc, "accurate")
+    exact = solve_sliding(sc.excitation, 0.15, g=9.81, t_out=tr.t).slip
+    slip = tr.x - tr.x[0] - np.asarray(sc.excitation.displacement(tr.t))[:, None]
+    assert np.max(np.abs(exact)) > 0.02  # 2.5 cm at the end
+    np.testing.assert_allclose(slip, np.column_stack([exact, exact]),
+                               atol=0.01 * np.max(np.abs(exact)))
+
+
+def test_interface_friction_zero_in_an_assembly_is_unsupported() -> None:
+    tr = PymunkEngine().simulate(_side_by_side(0.3, 0.0, 0.2))
+    assert tr.status is Status.UNSUPPORTED and "multiplies" in tr.message

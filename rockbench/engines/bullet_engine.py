@@ -55,6 +55,7 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
+from rockbench.engines.friction import assembly_frictions
 from rockbench.engines.settings import EngineSettings
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import Block, Scenario
@@ -553,19 +554,6 @@ def product_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
     if mu_if == mu:
         return [math.sqrt(mu)] * (n_blocks + 1)
     return [mu] + [1.0 if i % 2 == 0 else mu_if for i in range(n_blocks)]
-
-
-def assembly_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
-    """Per-body coefficients (ground and supports first) for the blocks of an assembly.
-
-    A block of an assembly may touch other blocks and the base at once, so every
-    block gets sqrt(μ_if) and the base μ / sqrt(μ_if): block pairs get μ_if, block
-    and base μ. Needs μ_if > 0 unless μ = 0 too.
-    """
-    if mu_if == mu:
-        return [math.sqrt(mu)] * (n_blocks + 1)
-    root = math.sqrt(mu_if)
-    return [mu / root] + [root] * n_blocks
 
 
 def principal_frame(tensor: np.ndarray) -> tuple[float, tuple[float, float, float]]:

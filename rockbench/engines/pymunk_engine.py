@@ -23,7 +23,13 @@ Pitfalls handled (see docs/engine-notes.md): Chipmunk's default
 sleeping is disabled; ``damping`` is 1 (none); Chipmunk multiplies the friction
 and elasticity of the two shapes in contact, so every shape gets the square
 root of the scenario's coefficient and each contact pair sees exactly
-``scenario.contact.friction`` and ``scenario.contact.restitution``.
+``scenario.contact.friction`` and ``scenario.contact.restitution``. With an
+interface friction μ_if ≠ μ, a stack's blocks alternate 1 and μ_if over a base of
+μ; an assembly's blocks, which touch blocks and the base at once, each get √μ_if
+over a base and supports of μ/√μ_if (:func:`~rockbench.engines.friction.assembly_frictions`;
+μ_if = 0 < μ is then unsupported). Tested: two blocks side by side on the base stay
+put at 0.2 g on μ = 0.3 whatever μ_if, and slide as the exact Coulomb slider at 0.5 g
+on μ = 0.15.
 
 Calibration (``benchmarks/calibrate_pymunk.py``, pymunk 7.3, free rocking B0–B3
 over 20 s and the six Single #2 pulses): ``accurate`` (dt 0.1 ms) max
@@ -52,6 +58,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
+from rockbench.engines.friction import assembly_frictions
 from rockbench.engines.settings import EngineSettings
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import Scenario
@@ -180,6 +187,12 @@ class PymunkEngine(Engine):
         Block or Stack field this adapter does not know to be planar is
         refused when it is set (truthy), rather than silently ignored.
         """
+        c = scenario.contact
+        if scenario.is_assembly and c.block_friction == 0.0 < c.friction:
+            raise UnsupportedScenario(
+                "pymunk multiplies two shapes' frictions, so an interface friction of 0 "
+                f"with μ = {c.friction:g} on the base cannot both hold in an assembly, whose "
+                "blocks touch each other and the base")
         for obj, known in ((scenario.stack, _PLANAR_STACK_FIELDS),) + tuple(
             (b, _PLANAR_BLOCK_FIELDS) for b in scenario.blocks
         ):
@@ -203,9 +216,12 @@ class PymunkEngine(Engine):
         space.sleep_time_threshold = math.inf  # never sleep
         # Chipmunk multiplies the two shapes' coefficients: the square root on
         # every shape gives each contact pair exactly the scenario's values
-        # (an interface friction: the base carries μ, the blocks alternate 1 and μ_if)
+        # (an interface friction: the base carries μ, a stack's blocks alternate 1 and
+        # μ_if; an assembly's blocks touch blocks and the base at once: each √μ_if)
         c = scenario.contact
-        if c.block_friction == c.friction:
+        if scenario.is_assembly:
+            mus = assembly_frictions(c.friction, c.block_friction, scenario.n_blocks)
+        elif c.block_friction == c.friction:
             mus = [math.sqrt(c.friction)] * (scenario.n_blocks + 1)
         else:
             mus = [c.friction] + [1.0 if i % 2 == 0 else c.block_friction
