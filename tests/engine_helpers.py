@@ -13,8 +13,10 @@ import pytest
 
 from rockbench.analytic.housner import single_block_reference
 from rockbench.engines import Engine
-from rockbench.scenarios import Block, Scenario, SinePulse, Stack
+from rockbench.runner import ExecutionOptions
+from rockbench.scenarios import Block, Scenario, SinePulse, Stack, get_scenario
 from rockbench.scenarios.assembly import Assembly, Prism, Support, rotate
+from rockbench.studies.tilting import quasi_static, tilting_table
 from rockbench.trajectory import Status, Trajectory
 
 B0 = Block(1.0, 0.2, 5.0, mass=1.0)
@@ -120,3 +122,34 @@ def inclined_scene(prism: bool, excitation: SinePulse | None = None) -> Scenario
         asm = Assembly((blk,), ((float(c[0]), float(c[1]), th),), (sup,))
     kw = {} if excitation is None else {"excitation": excitation}
     return Scenario(name="inclined", stack=asm, duration=1.5, output_rate=200.0, **kw)
+
+
+#: The assemblies an engine's tilting-table test holds to the limit analysis.
+TILT_CASES = ("parapet-offset0.25", "column-5drums")
+
+
+def check_tilting_table(engine: str, settings: dict | None = None, *, overshoot: float = 0.04,
+                        slower_first: bool = True, extrapolated: float | None = None) -> None:
+    """Tilting table at 0.05 /s and 0.025 /s on :data:`TILT_CASES` against the LP.
+
+    The onset at the slower rate lies within −0.5 % … ``overshoot`` of the LP
+    factor, halving the rate moves it by < 3.5 % (quasi-static), the slower run
+    is the earlier one (``slower_first``) or the rate-0 extrapolation within
+    ``extrapolated``, and the blocks that moved are the LP mechanism's, turning
+    its way.
+    """
+    cmps = tilting_table([get_scenario(n) for n in TILT_CASES], engine, rate=0.05,
+                         settings=settings or {}, execution=ExecutionOptions(isolate=False))
+    for name, c in zip(TILT_CASES, cmps, strict=True):
+        what = (f"{name}: onset α {c.run.onset_factor:.4f} / {c.half.onset_factor:.4f}, "
+                f"LP {c.limit.load_factor:.4f}")
+        assert c.half.status.completed, f"{what}: {c.half.message}"
+        assert -0.005 <= c.error <= overshoot, what
+        assert quasi_static(c, 0.035), what
+        if slower_first:
+            assert c.half.onset_factor <= c.run.onset_factor, what
+        if extrapolated is not None:
+            assert abs(c.extrapolated_error) <= extrapolated, what
+        assert c.mechanism_matches, f"{what}: moved {c.half.moved}"
+        signs = tuple(c.limit.mechanism[i].rotation_sign for i in c.half.moved)
+        assert c.half.rotation_sign == signs, what

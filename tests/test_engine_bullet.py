@@ -9,7 +9,11 @@ import pytest
 
 pytest.importorskip("pybullet")
 
-from engine_helpers import inclined_scene, zero_crossings  # noqa: E402
+from engine_helpers import (  # noqa: E402
+    check_tilting_table,
+    inclined_scene,
+    zero_crossings,
+)
 
 from rockbench.analytic.housner import single_block_reference  # noqa: E402
 from rockbench.engines import SettingsError, get_engine  # noqa: E402
@@ -19,10 +23,8 @@ from rockbench.engines.bullet_engine import (  # noqa: E402
     principal_frame,
 )
 from rockbench.metrics import impact_times  # noqa: E402
-from rockbench.runner import ExecutionOptions  # noqa: E402
 from rockbench.scenarios import Block, Contact, Scenario, SinePulse, get_scenario  # noqa: E402
 from rockbench.scenarios.assembly import Prism  # noqa: E402
-from rockbench.studies.tilting import quasi_static, tilting_table  # noqa: E402
 from rockbench.trajectory import Status  # noqa: E402
 
 
@@ -240,21 +242,8 @@ def test_interface_friction_zero_in_an_assembly_is_unsupported(engine: BulletEng
     assert tr.status is Status.UNSUPPORTED and "multiplies" in tr.message
 
 
-#: Tilting table at 0.05 /s and 0.025 /s (accurate preset), measured: parapet onsets
-#: 0.1302 / 0.1275 against the LP's 0.125 (+2.0 %), 5-drum column 0.2484 / 0.2450
-#: against 0.24 (+2.1 %), the LP mechanism (the parapet alone; the column as one body).
-TILT_CASES = ("parapet-offset0.25", "column-5drums")
-
-
+# Tilting table at 0.05 /s and 0.025 /s (accurate preset), measured: parapet onsets
+# 0.1302 / 0.1275 against the LP's 0.125 (+2.0 %), 5-drum column 0.2484 / 0.2450
+# against 0.24 (+2.1 %), the LP mechanism (the parapet alone; the column as one body).
 def test_tilting_table_onset_matches_the_collapse_factor() -> None:
-    cmps = tilting_table([get_scenario(n) for n in TILT_CASES], "bullet", rate=0.05,
-                         execution=ExecutionOptions(isolate=False))
-    for name, c in zip(TILT_CASES, cmps, strict=True):
-        what = (f"{name}: onset α {c.run.onset_factor:.4f} / {c.half.onset_factor:.4f}, "
-                f"LP {c.limit.load_factor:.4f}")
-        assert c.half.status.completed, f"{what}: {c.half.message}"
-        assert -0.005 <= c.error <= 0.04, what
-        assert quasi_static(c, 0.035) and c.half.onset_factor <= c.run.onset_factor, what
-        assert c.mechanism_matches, f"{what}: moved {c.half.moved}"
-        signs = tuple(c.limit.mechanism[i].rotation_sign for i in c.half.moved)
-        assert c.half.rotation_sign == signs, what
+    check_tilting_table("bullet")
