@@ -153,3 +153,16 @@ def check_tilting_table(engine: str, settings: dict | None = None, *, overshoot:
         assert c.mechanism_matches, f"{what}: moved {c.half.moved}"
         signs = tuple(c.limit.mechanism[i].rotation_sign for i in c.half.moved)
         assert c.half.rotation_sign == signs, what
+
+
+def check_arch_rides_its_supports(engine: Engine, *, rtol: float, turn: float) -> None:
+    """An arch stands on its two supports only: under a 2 Hz pulse at half its collapse
+    acceleration it rides with them, ending displaced by the base's 2πA (within ``rtol``)
+    with its voussoirs turned by less than ``turn`` λ."""
+    sc = get_scenario("arch-9v-t0.20")
+    f = 2.0
+    amp = 0.5 * 9.81 * math.tan(sc.critical_angle) / (2 * math.pi * f) ** 2
+    tr = engine.simulate(sc.replace(excitation=SinePulse(f, amp), duration=1.0))
+    assert tr.status is Status.OK, tr.message
+    np.testing.assert_allclose(tr.x[-1] - tr.x[0], 2 * math.pi * amp, rtol=rtol)
+    assert np.max(np.abs(tr.theta - tr.theta[0])) < turn * sc.critical_angle

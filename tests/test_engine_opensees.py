@@ -25,6 +25,7 @@ from engine_helpers import (  # noqa: E402
     B2,
     PAPER_STACK,
     SINGLE2,
+    check_arch_rides_its_supports,
     check_b0_impact_times_accurate_and_fast,
     check_b2_free_rocking_accurate,
     check_base_follows_excitation,
@@ -331,16 +332,8 @@ def test_assemblies_stay_at_rest_on_their_static_settlement() -> None:
 
 
 def test_supports_move_with_the_base() -> None:
-    # an arch stands on its two supports only: under a pulse at half its collapse
-    # acceleration it rides with them, ending displaced by the base's 2πA (measured
-    # within 4e-7 of it, turning by 4.1e-6 λ)
-    sc = get_scenario("arch-9v-t0.20")
-    f = 2.0
-    amp = 0.5 * 9.81 * math.tan(sc.critical_angle) / (2 * math.pi * f) ** 2
-    tr = OpenseesEngine().simulate(sc.replace(excitation=SinePulse(f, amp), duration=1.0))
-    assert tr.status is Status.OK, tr.message
-    np.testing.assert_allclose(tr.x[-1] - tr.x[0], 2 * math.pi * amp, rtol=1e-5)
-    assert np.max(np.abs(tr.theta - tr.theta[0])) < 1e-4 * sc.critical_angle
+    # measured: within 4e-7 of 2πA, turning by 4.1e-6 λ
+    check_arch_rides_its_supports(OpenseesEngine(), rtol=1e-5, turn=1e-4)
 
 
 def test_rockingbc_refuses_assemblies() -> None:
@@ -355,7 +348,6 @@ def test_rockingbc_refuses_assemblies() -> None:
 # about 2 min of CPU for the four runs.
 def test_tilting_table_onset_matches_the_collapse_factor() -> None:
     check_tilting_table("opensees")
-
 
 
 def test_frictionless_joints_between_blocks_carry_the_weight() -> None:
