@@ -734,19 +734,18 @@ class OpenseesEngine(Engine):
                     ops.uniaxialMaterial("ENT", mat_d, _EPS_DAMP * k)
                 # local x along the normal (out of body a), local y along the tangent
                 frame = ("-orient", nx, nz, 0.0, -nz, nx, 0.0)
-                first, second = side_a, side_b
                 if mu[between_blocks] == 0.0:
-                    ops.element("zeroLength", next(tags), first, second, "-mat", mat,
+                    ops.element("zeroLength", next(tags), side_a, side_b, "-mat", mat,
                                 "-dir", 1, *frame)
                 else:
                     # its shear iteration's default tolerance, 1e-12 N, is below the
                     # round-off of a heavy joint (a 5-drum column failed a step at
                     # 3.6e-12 N): relative to the weight the joint carries instead
-                    ops.element("flatSliderBearing", next(tags), first, second,
+                    ops.element("flatSliderBearing", next(tags), side_a, side_b,
                                 friction_tag[between_blocks], k, "-P", mat, "-Mz", 1, *frame,
                                 "-iter", 100, 1e-12 * max(1.0, k_face * g / omega**2))
                 tag = next(tags)
-                ops.element("zeroLength", tag, first, second, "-mat", mat_d, "-dir", 1,
+                ops.element("zeroLength", tag, side_a, side_b, "-mat", mat_d, "-dir", 1,
                             "-doRayleigh", 1, *frame)
                 dampers.append(tag)
             if beta > 0:
