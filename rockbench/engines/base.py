@@ -37,7 +37,10 @@ Contract for implementers (the numbered rules that every plugin follows)
    Return the physics time step actually used.
 4. Implement :meth:`_drive_base`: before a step starting at time ``t``, impose
    the base motion from ``scenario.excitation`` (velocity and/or displacement,
-   never tilted gravity). It is called before every step while the base moves,
+   not tilted gravity; the one exception is an engine whose number format cannot
+   follow a base that travels far and fast, which may run a tilting table, a
+   uniform base acceleration, in the base's frame and add u_g to the poses it
+   reads: Blender, see ``blender_engine``). It is called before every step while the base moves,
    by :meth:`_advance_driven`, which an engine may override to take many driven
    steps in one call (e.g. a compiled loop over precomputed base velocities).
 5. Optionally implement :meth:`_fix_base` (called once when the excitation has
@@ -76,7 +79,7 @@ from rockbench.bounds import SpeedBound
 from rockbench.engines.settings import EngineSettings, SettingsError
 from rockbench.errors import EngineUnavailable, UnsupportedScenario
 from rockbench.limits import check_memory
-from rockbench.scenarios import Scenario
+from rockbench.scenarios import Block, Scenario
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = ["Engine", "Capabilities", "angles_from_quaternions", "install_hint",
@@ -133,6 +136,11 @@ class Capabilities:
         ``unsupported`` for them.
     no_assemblies : str
         Why not, when ``assemblies`` is False (the unsupported status says it).
+    prisms : bool
+        Whether an assembly's blocks may be convex polygonal prisms
+        (:class:`~rockbench.scenarios.assembly.Prism`) besides rectangular blocks.
+    no_prisms : str
+        Why not, when ``prisms`` is False (the unsupported status says it).
     """
 
     dimensions: int = 3
@@ -141,6 +149,8 @@ class Capabilities:
     analytic: bool = False
     assemblies: bool = False
     no_assemblies: str = "only single blocks and stacks are built"
+    prisms: bool = True
+    no_prisms: str = ""
 
 
 def angles_from_quaternions(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -253,6 +263,10 @@ class Engine(ABC):
         if scenario.is_assembly and not cap.assemblies:
             raise UnsupportedScenario(
                 f"{self.name} does not build block assemblies: {cap.no_assemblies}")
+        if scenario.is_assembly and not cap.prisms \
+                and not all(isinstance(b, Block) for b in scenario.blocks):
+            raise UnsupportedScenario(
+                f"{self.name} builds assemblies of rectangular blocks only: {cap.no_prisms}")
         if not cap.chamfer and any(b.chamfer > 0 for b in scenario.blocks):
             raise UnsupportedScenario(f"{self.name} does not model chamfered blocks")
         self._check_supported(scenario)

@@ -84,6 +84,29 @@ What Blender really does (measured with bpy 5.0.1, see tests/test_engine_blender
   crashes there, so it empties the scene through the data API (same trajectories to the
   bit), and every operator gets its context explicitly.
 * Blender's matrices are float32: poses carry ~1e-7 relative rounding.
+* **Assemblies** (:class:`~rockbench.scenarios.assembly.Assembly`) of rectangular blocks:
+  each block a box (a hull when chamfered) at its pose, held in the plane like a single
+  block; a fixed support a PASSIVE box (any other convex polygon a hull shrunk by the
+  margin), twice the deepest block in depth, placed with the base every frame. Every
+  block gets sqrt(μ_if) and the base and supports μ / sqrt(μ_if), so that every pair's
+  product is the scenario's (stacks too: before, every body got sqrt(μ) and an interface
+  of μ_if = 0.05 on a base of 0.25 carried 0.25; the upper block rocked to 0.12 λ instead of
+  sliding; now within 0.3 % of the exact slip). Convex polygonal prisms are unsupported:
+  Bullet computes a hull's inertia from its bounding box (+16 to +70 % about y on the
+  voussoirs of arch-9v-t0.15) and bpy has no inertia to set, and hulls not symmetric about
+  their centroid explode in the first step (a trapezoid 20 m/s, a voussoir 250 m/s;
+  symmetric hulls, chamfered blocks, do not). Measured at rest over 0.5 s: column,
+  parapet and 6 × 3 wall ≤ 9e-7 λ, ≤ 5.3e-6 m; a block on a support rides it to 1e-3.
+* **Tilting table in the base's frame.** A :class:`~rockbench.scenarios.TiltTable` base
+  reaches tens of metres at metres per second; in Blender's single-precision Bullet the
+  5-drum column's bottom drum then slipped 10 mm behind its base by α = 0.24 (at 0.025/s)
+  and the column moved at 0.183 (−24 % of the LP). The plugin therefore keeps the base
+  still and tilts the scene's gravity by −ü_g each frame (mid-frame value, exact for a
+  translating base), adding u_g to the x it reads: B2 lifts within 2e-5 λ of Housner's
+  reference, the parapet and the column move at +2.8 % and +1.6 % of the LP (0.025/s).
+  The drums still creep on each other (2 mm by α = 0.24, Bullet's friction under a
+  sustained shear), and the 6 × 3 wall moves at 0.34–0.41 (−41 %) with 15 bricks,
+  not the LP's wedge of nine.
 
 Calibration (``rockbench compare --suite paper-free`` / ``paper-single-pulse`` and
 ``benchmarks/calibrate_blender.py``, bpy 5.0.1): ``accurate`` (Δt 0.1 ms, 20 iterations,
@@ -128,9 +151,12 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
+from rockbench.engines.friction import assembly_frictions
 from rockbench.engines.settings import EngineSettings
 from rockbench.errors import EngineUnavailable, UnsupportedScenario
 from rockbench.scenarios import Scenario
+from rockbench.scenarios.assembly import Support
+from rockbench.scenarios.excitation import TiltTable
 
 __all__ = ["BlenderEngine", "BlenderSettings", "BLENDER_DEFAULTS", "BPY_PYTHON"]
 
@@ -257,10 +283,12 @@ class BlenderEngine(Engine):
 
     name: ClassVar[str] = "blender"
     capabilities: ClassVar[Capabilities] = Capabilities(
-        dimensions=3, max_blocks=None, chamfer=True,
-        no_assemblies=("not built yet: the scene builder places upright blocks and centred stacks "
-                       "only; the same Bullet library builds assemblies through pybullet (--engine "
-                       "bullet)"))
+        dimensions=3, max_blocks=None, chamfer=True, assemblies=True, prisms=False,
+        no_prisms=("Bullet gives a convex hull the inertia of its bounding box and bpy exposes "
+                   "no inertia (a voussoir of arch-9v-t0.15 would get +16 to +70 % about y), "
+                   "and hulls not symmetric about their centroid explode at the first step in "
+                   "Blender (measured: an arch voussoir 250 m/s); the same Bullet builds prisms "
+                   "through pybullet (--engine bullet)"))
     Settings: ClassVar[type[EngineSettings]] = BlenderSettings
     #: bpy is one global Blender session per process: a fresh worker for every run
     fresh_process: ClassVar[bool] = True
@@ -294,10 +322,16 @@ class BlenderEngine(Engine):
         self._bpy: Any = None
         self._scene: Any = None
         self._blocks: list[Any] = []
+        #: An assembly's support objects and their rest x (m).
+        self._supports: list[tuple[Any, float]] = []
         self._base: Any = None
         self._motor: Any = None
         self._view_layer: Any = None
         self._frame = 1
+        self._frame_length = 0.0
+        #: A tilting table's excitation, run as tilted gravity; None otherwise.
+        self._tilt: TiltTable | None = None
+        self._g = 9.81
         self._u: list[float] = []
         self._poses = np.zeros((0, 7))
         #: Where the base ended (m along x), recorded at teardown.
@@ -327,6 +361,13 @@ class BlenderEngine(Engine):
         return str(cls.library("bpy").app.version_string)
 
     # ------------------------------------------------------------------ hooks
+    def _check_supported(self, scenario: Scenario) -> None:
+        c = scenario.contact
+        if c.block_friction == 0.0 < c.friction and scenario.n_blocks > 1:
+            raise UnsupportedScenario(
+                "blender: Bullet multiplies the two bodies' friction coefficients: "
+                "frictionless block-block joints with friction on the base cannot both hold")
+
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
         s: BlenderSettings = settings  # type: ignore[assignment]
         if s.collision_shape == "mesh" and scenario.n_blocks > 1:
@@ -359,32 +400,52 @@ class BlenderEngine(Engine):
         world.use_split_impulse = s.use_split_impulse
         world.point_cache.frame_start = 1
         world.point_cache.frame_end = 1 + n_frames
+        self._g = scenario.g
         scene.gravity = (0.0, 0.0, -scenario.g)
         scene.use_gravity = True
 
-        mu = scenario.contact.friction if s.friction is None else s.friction
-        e = scenario.contact.restitution if s.restitution is None else s.restitution
-        mu, e = math.sqrt(mu), math.sqrt(e)
+        c = scenario.contact
+        if s.friction is not None:
+            mus = [math.sqrt(s.friction)] * (scenario.n_blocks + 1)
+        else:  # Bullet multiplies the two bodies' coefficients (every pair gets its own)
+            mus = assembly_frictions(c.friction, c.block_friction, scenario.n_blocks)
+        e = math.sqrt(c.restitution if s.restitution is None else s.restitution)
 
         exc = scenario.excitation
         blocks = scenario.blocks
-        reach = max(b.b for b in blocks) + scenario.stack.total_height \
+        reach = max(0.5 * b.width for b in blocks) + scenario.stack.total_height \
             + exc.motion_bounds(scenario.duration)[0]
-        half = (max(1.0, 2.0 * reach), max(1.0, 2.0 * reach, max(b.depth for b in blocks)), 0.5)
+        if scenario.is_assembly:  # wide scenes: the blocks' spread along x too
+            reach += scenario.stack.reach + scenario.stack.size
+        depth = max(b.depth for b in blocks)
+        half = (max(1.0, 2.0 * reach), max(1.0, 2.0 * reach, depth), 0.5)
         base = self._base = _prism(bpy, scene, "base", _box_profile(half[0], half[2]),
                                    half[1])
         base.location = (0.0, 0.0, -half[2])
-        moving = not exc.is_free
+        # a tilting table is its base's frame, the scene's gravity tilted (see _drive_base)
+        self._tilt = exc if isinstance(exc, TiltTable) else None
+        moving = not exc.is_free and self._tilt is None
         motor = moving and s.drive == "motor"
         _rigid_body(bpy, base, s, type_="ACTIVE" if motor else "PASSIVE", shape="BOX",
                     mass=_MOTOR_BASE_MASS * sum(b.m for b in blocks) if motor else 1.0,
-                    friction=mu, restitution=e, kinematic=moving and not motor)
+                    friction=mus[0], restitution=e, kinematic=moving and not motor)
         self._motor = _motor_drive(bpy, scene, base, s) if motor else None
+        # an assembly's supports: PASSIVE bodies of the base's kind, placed with it
+        self._supports = []
+        for k, sup in enumerate(getattr(scenario.stack, "supports", ())):
+            if motor:
+                raise UnsupportedScenario("blender: drive='motor' moves the base body only; "
+                                          "an assembly's supports need drive='kinematic'")
+            ob, shape = _support(bpy, scene, k, sup, depth,
+                                 s.collision_margin if s.use_margin else 0.0)
+            _rigid_body(bpy, ob, s, type_="PASSIVE", shape=shape, mass=1.0,
+                        friction=mus[0], restitution=e, kinematic=moving)
+            self._supports.append((ob, float(ob.location.x)))
 
         centroids, th0 = scenario.initial_poses()
-        quat = (math.cos(0.5 * th0), 0.0, math.sin(0.5 * th0), 0.0)
         self._blocks = []
-        for i, (blk, (cx, cz)) in enumerate(zip(blocks, centroids, strict=True)):
+        for i, (blk, (cx, cz), a, mu) in enumerate(zip(
+                blocks, centroids, th0 + scenario.block_angles, mus[1:], strict=True)):
             shape = _SHAPES[s.collision_shape]
             if blk.chamfer > 0.0 and shape == "BOX":
                 shape = "CONVEX_HULL"
@@ -395,7 +456,7 @@ class BlenderEngine(Engine):
                         0.5 * blk.depth - m)
             ob.location = (float(cx), 0.0, float(cz))
             ob.rotation_mode = "QUATERNION"
-            ob.rotation_quaternion = quat
+            ob.rotation_quaternion = (math.cos(0.5 * a), 0.0, math.sin(0.5 * a), 0.0)
             _rigid_body(bpy, ob, s, type_="ACTIVE", shape=shape, mass=blk.m, friction=mu,
                         restitution=e, kinematic=False)
             self._blocks.append(ob)
@@ -413,17 +474,22 @@ class BlenderEngine(Engine):
         else:
             self._u = []
         self._view_layer = scene.view_layers[0]
-        self._frame = 1
+        self._frame, self._frame_length = 1, frame
         scene.frame_set(1)
         return frame
 
     def _drive_base(self, t: float, dt: float) -> None:
+        if self._tilt is not None:
+            # in the base's frame every body feels −m·ü_g besides its weight: exact for a
+            # translating base; ü_g is linear in t, so its mid-frame value is the frame's mean
+            a = float(self._tilt.acceleration(t + 0.5 * dt))
+            self._scene.gravity = (-a, 0.0, -self._g)
+            return
         # the frame ending at t + dt: the base is there when Blender steps into it
         i = min(int(round(t / dt)) + 1, len(self._u) - 1)
         if self._motor is None:
             # evaluated now, before the frame step reads it (see the module docstring)
-            self._base.location.x = self._u[i]
-            self._view_layer.update()
+            self._place_base(self._u[i])
         else:
             # a positive target velocity moves object2 (the base) toward −x (measured)
             self._motor.motor_lin_target_velocity = -(self._u[i] - self._u[i - 1]) / dt
@@ -432,9 +498,15 @@ class BlenderEngine(Engine):
         if self._motor is not None:
             self._motor.motor_lin_target_velocity = 0.0
         elif self._u:
-            self._base.location.x = self._u[-1]
-            self._view_layer.update()
+            self._place_base(self._u[-1])
         return True
+
+    def _place_base(self, u: float) -> None:
+        """Put the base (and the supports) at displacement ``u`` and evaluate the scene."""
+        self._base.location.x = u
+        for ob, x0 in self._supports:
+            ob.location.x = x0 + u
+        self._view_layer.update()
 
     def _advance(self, n: int) -> None:
         frame_set, f = self._scene.frame_set, self._frame
@@ -449,15 +521,25 @@ class BlenderEngine(Engine):
             q = m.to_quaternion()
             p = m.translation
             out[i] = (p.x, p.y, p.z, q.w, q.x, q.y, q.z)
+        if self._tilt is not None:  # from the base's frame to the world's
+            out[:, 0] += self._tilt_displacement()
         return out
 
+    def _tilt_displacement(self) -> float:
+        """u_g at the current frame of a tilting table (the base's frame's offset)."""
+        return float(self._tilt.displacement((self._frame - 1) * self._frame_length))
+
     def _teardown(self) -> None:
-        if self._base is not None:
+        if self._tilt is not None:
+            self.base_end = self._tilt_displacement()
+        elif self._base is not None:
             self.base_end = float(self._base.matrix_world.translation.x)
         if self._bpy is not None:
             _empty_scene(self._bpy)
         self._bpy = self._scene = self._base = self._motor = self._view_layer = None
+        self._tilt = None
         self._blocks = []
+        self._supports = []
         self._u = []
 
 
@@ -521,6 +603,23 @@ def _prism(bpy: Any, scene: Any, name: str, profile: np.ndarray, half_depth: flo
     ob = bpy.data.objects.new(name, mesh)
     scene.collection.objects.link(ob)
     return ob
+
+
+def _support(bpy: Any, scene: Any, k: int, sup: Support, depth: float,
+             margin: float) -> tuple[Any, str]:
+    """Mesh object of a fixed support at its rest place, and its collision shape.
+
+    An axis-aligned rectangle is a BOX (exact corners against box blocks); any other
+    convex polygon a CONVEX_HULL, shrunk by the ``margin`` Bullet inflates it by. The
+    support is ``2 · depth`` deep, so every block's depth lies on it.
+    """
+    v = sup.array
+    centre = 0.5 * (v.min(axis=0) + v.max(axis=0))
+    box = len(v) == 4 and all(len(set(col)) == 2 for col in v.T.tolist())
+    prof = v - centre if box else _offset_polygon(v - centre, margin)
+    ob = _prism(bpy, scene, f"support{k}", prof, depth)
+    ob.location = (float(centre[0]), 0.0, float(centre[1]))
+    return ob, "BOX" if box else "CONVEX_HULL"
 
 
 def _operator(bpy: Any, scene: Any, ob: Any, op: Any, **kw: Any) -> None:

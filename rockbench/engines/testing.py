@@ -41,6 +41,7 @@ from rockbench.scenarios.assembly import (
     Support,
     penetration,
     rotate,
+    running_bond_wall,
     voussoir_arch,
 )
 from rockbench.scenarios.catalog import SINGLE2, STACK2
@@ -226,13 +227,21 @@ def check_forced_peak(engine: Engine, settings: Any = None,
     )
 
 
-def _assembly_scene() -> Assembly:
+def _assembly_scene(prisms: bool = True) -> Assembly:
     """A small assembly of every kind of body: a block on a support, a block on the base,
-    a trapezoidal prism on top of it (asymmetric, so that mirroring it is a real test)."""
+    a trapezoidal prism on top of it (asymmetric, so that mirroring it is a real test).
+
+    Without ``prisms`` (an engine that builds rectangular blocks only) the top body is a
+    box standing off-centre on its block, which keeps the scene asymmetric.
+    """
+    top: Block | Prism = Prism(((0.1, 0.9), (0.4, 0.9), (0.35, 1.2), (0.15, 1.2)), 0.3,
+                               density=2000.0)
+    top_pose = (0.0, 0.0, 0.0)
+    if not prisms:
+        top, top_pose = Block(0.2, 0.3, 0.3, density=2000.0), (0.3, 1.05, 0.0)
     return Assembly(
-        (Block(0.4, 0.3, 0.6, density=2000.0), Block(0.3, 0.3, 0.9, density=2000.0),
-         Prism(((0.1, 0.9), (0.4, 0.9), (0.35, 1.2), (0.15, 1.2)), 0.3, density=2000.0)),
-        ((-0.3, 0.6, 0.0), (0.25, 0.45, 0.0), (0.0, 0.0, 0.0)),
+        (Block(0.4, 0.3, 0.6, density=2000.0), Block(0.3, 0.3, 0.9, density=2000.0), top),
+        ((-0.3, 0.6, 0.0), (0.25, 0.45, 0.0), top_pose),
         (Support.rectangle(-0.5, -0.1, 0.0, 0.3),))
 
 
@@ -243,15 +252,21 @@ def _assembly_pulse(scene: Assembly, factor: float = 2.0) -> SinePulse:
     return SinePulse(f, factor * 9.81 * alpha / (2 * math.pi * f) ** 2)
 
 
-def _rest_assemblies(duration: float = 2.0) -> list[Scenario]:
-    return [_scenario("assembly-rest", _assembly_scene(), duration=duration, output_rate=200.0),
-            _scenario("arch-rest", voussoir_arch(9, 0.2), duration=duration, output_rate=200.0)]
+def _rest_assemblies(engine: Engine, duration: float = 2.0) -> list[Scenario]:
+    """The scene above and an arch of voussoirs; for an engine without prisms, the scene
+    of boxes and a running-bond wall (head joints, half bricks) in place of the arch."""
+    prisms = engine.capabilities.prisms
+    second = ("arch-rest", voussoir_arch(9, 0.2)) if prisms else \
+        ("wall-rest", running_bond_wall(4, 3))
+    return [_scenario("assembly-rest", _assembly_scene(prisms), duration=duration,
+                      output_rate=200.0),
+            _scenario(second[0], second[1], duration=duration, output_rate=200.0)]
 
 
 def check_assembly_rest(engine: Engine, settings: Any = None,
                         tol: Tolerances = Tolerances()) -> None:
     """Assemblies on a still base (blocks on supports, a prism, an arch) stay at rest."""
-    for sc in _rest_assemblies():
+    for sc in _rest_assemblies(engine):
         traj = _run(engine, sc, settings)
         assert traj.status is Status.OK, f"{sc.name}: status {traj.status} ({traj.message})"
         turn = float(np.max(np.abs(traj.theta - traj.theta[0]))) / sc.critical_angle
@@ -264,7 +279,7 @@ def check_assembly_rest(engine: Engine, settings: Any = None,
 def check_assembly_penetration(engine: Engine, settings: Any = None,
                                tol: Tolerances = Tolerances()) -> None:
     """At rest no two bodies of an assembly (blocks, supports, base) overlap beyond tol."""
-    for sc in _rest_assemblies(duration=1.0):
+    for sc in _rest_assemblies(engine, duration=1.0):
         traj = _run(engine, sc, settings)
         asm = sc.stack
         polys = [c + rotate(b.profile(), th) for b, c, th in zip(
@@ -286,7 +301,7 @@ def check_assembly_penetration(engine: Engine, settings: Any = None,
 
 
 def _mirrored_runs(engine: Engine, settings: Any) -> tuple[Trajectory, Trajectory, Scenario]:
-    scene = _assembly_scene()
+    scene = _assembly_scene(engine.capabilities.prisms)
     pulse = _assembly_pulse(scene)
     pos = _scenario("assembly-mirror+", scene, excitation=pulse, duration=1.5)
     neg = _scenario("assembly-mirror-", scene.mirrored(),
@@ -312,7 +327,7 @@ def check_assembly_mirror_symmetry(engine: Engine, settings: Any = None,
 def check_assembly_determinism(engine: Engine, settings: Any = None,
                                tol: Tolerances = Tolerances()) -> None:
     """Two identical runs of a rocking assembly give identical trajectories."""
-    scene = _assembly_scene()
+    scene = _assembly_scene(engine.capabilities.prisms)
     sc = _scenario("assembly-determinism", scene, excitation=_assembly_pulse(scene),
                    duration=1.0)
     a, b = _run(engine, sc, settings), _run(engine, sc, settings)
