@@ -47,8 +47,6 @@ ST = "slide-stack-pulse-5.0hz-4mm-mu0.10"
 
 #: (engine, case) → measured reason (slip error as max |Δs| / max |s_ref|).
 KNOWN: dict[tuple[str, str], str] = {
-    ("dem2d", SS): "slip error 3.5 % (no rocking: 2e-5 λ)",
-    ("dem2d", ST): "interface slip 1.9e-4 m between the blocks (slip errors 0.97 % / 0.59 %)",
     ("drake", S3): "slip error 2.8 %: first slip 1.7 % longer, the return 1.2 % shorter",
     ("drake", S5): "slip error 83 %, rocks to 0.11 λ",
     ("drake", SS): "slip error 203 %, rocks to 0.18 λ",

@@ -70,6 +70,29 @@ needs ε ≈ 2e-5. ``accurate``: ε = 2e-5 (k_n = 9.2e10 N/m³ for Single #2,
 1.1e11 for the paper's stack; the 1 kg catalog blocks keep the 1e9 floor,
 ε ≈ 1e-6); at 0.8 × the threshold Single #2 then rotates by 1.6e-5 λ.
 
+Contacts that slide first (``slip_compliance``)
+-----------------------------------------------
+A contact whose friction is below the uplift ratio of the blocks it carries
+(μ < b / h_G, :func:`slides_first`) slides before they rock, and every
+reversal of its slip costs the blocks momentum to the same elasticity: the
+friction's moment μ M g h_G changes sign, so the block has to pitch over on its
+corner springs (the elastic rotation above, ω_p = sqrt(2 K b² / I_O) with I_O
+about the face's centre: 859 rad/s, ζ ≈ 0.6 for Single #2 at ε = 2e-5); the
+corners stick while it does (friction M (ü_g + h_G θ̈) below μ M g) until the
+pitch's acceleration has gone, and the centroid keeps the pitch's h_G θ̇,
+about 2 μ g / ω_p times a damping factor, for the whole slide that follows.
+Single #2 at μ = 0.15 on the 3 Hz / 8 mm sine: 1.4 mm/s at the reversal of
+0.365 s, a slip error of 3.5 % of the peak exact slip. A stack's interface carries
+exactly μ N while the stack slides as one, so it keeps each such kick as a
+steady slip: 1.9e-4 m on the 5 Hz / 4 mm pulse at μ = 0.1. The shear springs
+take no part (without the shear dashpot: 3.4 %; a quarter of the step: 3.46 %);
+the error falls as sqrt(ε) (3.5, 1.8, 0.81, 0.57 % at ε = 2e-5, 5e-6, 1e-6,
+5e-7), and so does the step. Such a contact of a single block or a stack takes
+ε = ``slip_compliance`` where that is smaller: ``accurate`` 5e-7 (k_n = 3.7e12
+N/m³ for Single #2 at μ = 0.15, 4.5e12 for the paper's stack at μ = 0.1; 6.3 ×
+smaller steps, 5–7 × the CPU). ``fast`` keeps ε for every contact; the
+rocking cases (μ = 1 against b/h ≤ 0.67) are untouched.
+
 Time step
 ---------
 Δt = safety · sqrt(m_eff / k_max) · (sqrt(1 + ζ_max²) − ζ_max), the
@@ -86,7 +109,9 @@ parts: each block (rectangle or convex prism) a polygon at its pose, each
 fixed support a body with zero inverse mass translating with the base, and
 the same face-pair contact with corner sub-contacts between every block and
 every other body (:func:`contact_pairs`). The stiffness from ``compliance``
-and the impact β of each pair come from its interface at rest
+(``slip_compliance`` is not applied: an assembly has no exact sliding
+reference, and its stiffest faces already set small steps) and the impact β
+of each pair come from its interface at rest
 (:func:`assembly_contacts`; a pair not in contact at rest takes the upper
 block alone on its own face). A block of a wall or an arch rests on several
 faces at once, so the stable step is bounded per block on all its contacts
@@ -116,6 +141,12 @@ In-process CPU times on a shared 2-core machine.
 * The paper's two-block pulses (8, 4 s): both peaks within 2.0 % / 5.0 % of
   the two-block model where it is ≥ 0.02 λ (3.3 Hz / 4 mm, 0.010 λ, is near
   the threshold and not scored: 0.008 / 0.006 λ); 0.35–0.47 s / 0.16–0.21 s.
+* The sliding suite (6 cases, μ = 0.1–0.25 below b/h; tests/test_sliding_engines.py):
+  slip within 0.57 % of the exact Coulomb slider's peak slip (the 3 s sine;
+  the others ≤ 0.16 %), the stack's interface slip 3.5e-5 m (0.28 % of the
+  peak slip), the interface-slip case within 0.011 %; rocking ≤ 1e-6 λ;
+  0.08–1.0 s CPU (0.04–0.16 s with the rocking stiffness, which left 3.5 % on
+  the sine and 1.9e-4 m at the stack's interface).
 * ``fast`` against ``accurate``: B2 free rocking within 0.005 λ, the Single #2
   3.3 Hz / 6 mm pulse peak within 1 %, the stack's 5 Hz / 4 mm peaks within
   3 % (tests/test_engine_dem2d.py); 0.014 λ on the 10 s single-sine-5.0hz-6mm
@@ -145,7 +176,7 @@ from rockbench.scenarios import Free, Scenario
 __all__ = ["CornerContact", "Dem2dEngine", "Dem2dSettings", "adjacent_pairs", "assembly_contacts",
            "contact_pairs",
            "contact_stiffness", "corner_contact", "impact_zeta_for", "pair_damping",
-           "probe_eta", "stiffness_for"]
+           "probe_eta", "slides_first", "stiffness_for"]
 
 #: Steps of base displacement evaluated at once (one vectorised call per chunk;
 #: 160 kB of float64).
@@ -157,12 +188,12 @@ class Dem2dSettings(EngineSettings):
     """Knobs of the dem2d engine (defaults = the ``accurate`` preset).
 
     Presets: ``accurate`` (the defaults: corner sub-contacts, k_n = k_s ≥ 1e9
-    N/m³ raised to an elastic rotation of 2e-5 λ at the uplift threshold,
-    impact damping ζ_c = 3, safety 2), ``fast`` (k_n ≥ 1e8 N/m³, 5e-5 λ,
-    ζ_c = 2) and ``paper`` (the 3DEC-like model of the paper: 5 sub-contacts,
-    k_n = 1e9 N/m³, β = 0.14 / ω_c, safety 0.2; it under-dissipates at
-    impacts). The module docstring has the calibration and the measured
-    distances.
+    N/m³ raised to an elastic rotation of 2e-5 λ at the uplift threshold, 5e-7 λ
+    where a contact slides first, impact damping ζ_c = 3, safety 2), ``fast``
+    (k_n ≥ 1e8 N/m³, 5e-5 λ for every contact, ζ_c = 2) and ``paper`` (the
+    3DEC-like model of the paper: 5 sub-contacts, k_n = 1e9 N/m³, β = 0.14 / ω_c,
+    safety 0.2; it under-dissipates at impacts). The module docstring has the
+    calibration and the measured distances.
 
     Parameters
     ----------
@@ -182,7 +213,14 @@ class Dem2dSettings(EngineSettings):
     compliance : float or None
         Largest elastic rotation ε (in units of λ) that a block may show at
         the uplift threshold: k_n (and k_s) are raised to :func:`stiffness_for`
-        of every contact if that is stiffer. None: k_n, k_s as given.
+        of every contact if that is stiffer. None: k_n, k_s as given (and
+        ``slip_compliance`` ignored).
+    slip_compliance : float or None
+        ε of the contacts of a single block or a stack that slide before the
+        blocks they carry rock (μ < b / h_G, :func:`slides_first`), where it is
+        smaller than ``compliance``: each reversal of slip leaves the blocks
+        the momentum of their elastic pitch, ∝ sqrt(ε) (module docstring).
+        None: ``compliance`` for every contact.
     damping : {"impact", "contact"}
         How β is chosen when ``beta`` is None. "impact": each pair's β gives
         its corner sub-contact, a single-DOF oscillator of the corner spring
@@ -213,6 +251,7 @@ class Dem2dSettings(EngineSettings):
     kn: float = 1e9
     ks: float = 1e9
     compliance: float | None = 2e-5
+    slip_compliance: float | None = 5e-7
     damping: Literal["impact", "contact"] = "impact"
     impact_zeta: float = 3.0
     damping_ratio: float = 0.14
@@ -227,9 +266,10 @@ class Dem2dSettings(EngineSettings):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v!r}")
-        if self.compliance is not None and not (math.isfinite(self.compliance)
-                                                and self.compliance > 0):
-            raise ValueError(f"compliance must be finite and > 0, got {self.compliance!r}")
+        for name in ("compliance", "slip_compliance"):
+            v = getattr(self, name)
+            if v is not None and not (math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be finite and > 0, got {v!r}")
         for name in ("damping_ratio", "impact_zeta"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
@@ -382,16 +422,33 @@ def stiffness_for(contact: CornerContact, compliance: float, g: float = 9.81) ->
     return m * g * (b / (compliance * lam) + h) / (2.0 * b * b) / contact.area
 
 
+def slides_first(contact: CornerContact, mu: float) -> bool:
+    """Whether a contact of friction ``mu`` slips before the blocks it carries rock:
+    μ below their uplift ratio b / h_G (module docstring, "Contacts that slide first")."""
+    return mu * contact.height < contact.half_width
+
+
 def contact_stiffness(scenario: Scenario, s: Dem2dSettings) -> tuple[float, float]:
-    """(k_n, k_s) in N/m³: the knobs, raised by ``compliance`` (k_s in proportion)."""
+    """(k_n, k_s) in N/m³: the knobs, raised by ``compliance`` (k_s in proportion).
+
+    A single block's or a stack's contact that slides first (:func:`slides_first`) is
+    raised to ``slip_compliance`` where that is the smaller rotation.
+    """
     if s.compliance is None:
         return s.kn, s.ks
     if scenario.is_assembly:
         kn = max([s.kn] + [stiffness_for(c, s.compliance, scenario.g) for c in
                            assembly_contacts(scenario, s.subcontacts).values()])
         return kn, s.ks * kn / s.kn
-    kn = max([s.kn] + [stiffness_for(corner_contact(scenario, p, s.subcontacts), s.compliance,
-                                     scenario.g) for p in adjacent_pairs(scenario)])
+    nb = len(scenario.blocks)
+    kn = s.kn
+    for p in adjacent_pairs(scenario):
+        c = corner_contact(scenario, p, s.subcontacts)
+        mu = scenario.contact.friction if p[1] == nb else scenario.contact.block_friction
+        eps = s.compliance
+        if s.slip_compliance is not None and slides_first(c, mu):
+            eps = min(eps, s.slip_compliance)
+        kn = max(kn, stiffness_for(c, eps, scenario.g))
     return kn, s.ks * kn / s.kn
 
 
@@ -532,7 +589,8 @@ class Dem2dEngine(Engine):
     Settings: ClassVar[type[EngineSettings]] = Dem2dSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
-        "fast": {"kn": 1e8, "ks": 1e8, "compliance": 5e-5, "impact_zeta": 2.0},
+        "fast": {"kn": 1e8, "ks": 1e8, "compliance": 5e-5, "slip_compliance": None,
+                 "impact_zeta": 2.0},
         # the 3DEC-like model of the paper (rockbench's dem2d before the calibration)
         "paper": {"subcontacts": 5, "compliance": None, "damping": "contact",
                   "damping_ratio": 0.14, "safety": 0.2},
