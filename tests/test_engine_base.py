@@ -238,3 +238,42 @@ def test_steps_that_do_not_divide_the_output_interval_are_interpolated(carry, dt
     traj = carry.simulate(sc, {"timestep": dt, "spin": 0.5})
     np.testing.assert_allclose(traj.t, np.arange(61) / 100.0)
     np.testing.assert_allclose(traj.theta[:, 0], sc.theta0 + 0.5 * traj.t, atol=1e-3)
+
+
+def _poses(xz_theta: list[tuple[float, float, float]]) -> np.ndarray:
+    """One sample of poses (x, y, z, w, qx, qy, qz) from (x, z, θ) per block."""
+    return np.array([[x, 0.0, z, math.cos(0.5 * th), 0.0, math.sin(0.5 * th), 0.0]
+                     for x, z, th in xz_theta])
+
+
+def test_the_watchdog_stops_a_run_where_unmodelled_bodies_overlap() -> None:
+    from rockbench.scenarios.assembly import Assembly, Support
+
+    # two blocks 1 cm apart beside a support; pairs named unmodelled: block 1 and block 2,
+    # block 2 and the support (body 2), block 1 and the base (body 3)
+    scene = Assembly((Block(0.2, 0.2, 0.8, mass=1.0), Block(0.4, 0.2, 0.4, mass=1.0)),
+                     ((-0.11, 0.4, 0.0), (0.21, 0.2, 0.0)),
+                     (Support.rectangle(0.42, 0.6, 0.0, 0.3),))
+    # a base that barely moves (no energy check) and samples far apart (no speed bound)
+    sc = Scenario("gap", scene, excitation=SinePulse(2.0, 1e-9), duration=1.0,
+                  output_rate=10.0)
+    rest = _poses([(-0.11, 0.4, 0.0), (0.21, 0.2, 0.0)])
+    watch = _Watchdog(sc, ((0, 1), (1, 2), (0, 3)))
+    chunk = np.repeat(rest[None], 5, axis=0)
+    assert watch.check(chunk, np.arange(1, 5) * 0.1) is None
+    # block 1 turned by 0.1 rad about its lower right corner reaches 2.1 cm into block 2
+    # (0.8 · sin 0.1 − 1 cm, less the corner's drop): stopped there, named
+    leaning = _poses([(-0.01 - 0.1 * math.cos(0.1) + 0.4 * math.sin(0.1),
+                       0.1 * math.sin(0.1) + 0.4 * math.cos(0.1), 0.1), (0.21, 0.2, 0.0)])
+    chunk[3] = leaning
+    j, (status, message) = watch.check(chunk, np.arange(1, 5) * 0.1)
+    assert (j, status) == (2, Status.UNSTABLE)
+    assert "block 1 and block 2 overlap" in message and "t = 0.3 s" in message
+    # block 2 slid 2 cm, 1 cm into the support; block 1 sunk 1 cm into the base
+    for poses, what in (([(-0.11, 0.4, 0.0), (0.23, 0.2, 0.0)], "block 2 and support 1"),
+                        ([(-0.11, 0.39, 0.0), (0.21, 0.2, 0.0)], "block 1 and the base")):
+        chunk[3] = _poses(poses)
+        found = watch.check(chunk, np.arange(1, 5) * 0.1)
+        assert found is not None and f"{what} overlap by 0.01 m" in found[1][1], found
+    # pairs the engine models are not watched
+    assert _Watchdog(sc).check(chunk, np.arange(1, 5) * 0.1) is None

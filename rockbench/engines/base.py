@@ -53,7 +53,9 @@ Contract for implementers (the numbered rules that every plugin follows)
    bottom block first. 2D engines map their plane to x–z and set y = 0.
 8. Optionally override :meth:`_check_supported` to raise
    :class:`~rockbench.errors.UnsupportedScenario` for what the engine cannot
-   model, and :meth:`_teardown` to free native resources.
+   model, :meth:`unmodelled_pairs` to name an assembly's body pairs it builds no
+   contact between (the run is then watched for their overlap), and
+   :meth:`_teardown` to free native resources.
 9. Do not override :meth:`simulate`: it owns timing, sampling at the output
    rate, NaN/explosion/energy-gain/overturning detection and the Trajectory.
 10. Register the class under the entry-point group ``rockbench.engines`` and run
@@ -68,7 +70,7 @@ import importlib
 import math
 import time
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from types import ModuleType
 from typing import Any, ClassVar
@@ -76,6 +78,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from rockbench.bounds import SpeedBound
+from rockbench.engines.overlap import OverlapWatch
 from rockbench.engines.settings import EngineSettings, SettingsError
 from rockbench.errors import EngineUnavailable, UnsupportedScenario
 from rockbench.limits import check_memory
@@ -320,7 +323,8 @@ class Engine(ABC):
         # steps; otherwise read every step and interpolate onto the output times
         aligned = k >= 1 and abs(ratio - k) <= 1e-6 * ratio
         exc = scenario.excitation
-        watch = _Watchdog(scenario)
+        watch = _Watchdog(scenario, self.unmodelled_pairs(scenario) if scenario.is_assembly
+                          else ())
         poses = np.full((n_out, nb, 7), np.nan)
         poses[0] = self._read_poses()
         sampler = self._sample_aligned if aligned else self._sample_interpolated
@@ -395,6 +399,17 @@ class Engine(ABC):
         return n_out, None
 
     # ------------------------------------------------------------------ hooks
+    def unmodelled_pairs(self, scenario: Scenario) -> tuple[tuple[int, int], ...]:
+        """Body pairs of an assembly between which this engine builds no contact (rule 8).
+
+        Bodies are numbered as in the limit analysis: blocks, then supports, then the
+        base (:mod:`rockbench.engines.overlap`). The default is none: every body
+        collides with every other. An engine that lays its contacts once, at rest,
+        names the other pairs; a run in which any of them overlap stops as
+        ``unstable``, naming them.
+        """
+        return ()
+
     @abstractmethod
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
         """Create the scene (rule 3); return the physics time step in s."""
@@ -464,8 +479,10 @@ class _Watchdog:
     #: is stopped.
     PERIOD = 1.0
 
-    def __init__(self, scenario: Scenario) -> None:
+    def __init__(self, scenario: Scenario, unmodelled: Sequence[tuple[int, int]] = ()) -> None:
         self.masses = np.array([b.m for b in scenario.blocks])
+        # body pairs the engine has no contact between: any overlap is a missed contact
+        self.overlaps = OverlapWatch(scenario, unmodelled) if unmodelled else None
         height = scenario.stack.total_height
         exc = scenario.excitation
         u_base, v_base = exc.motion_bounds(scenario.duration)
@@ -527,10 +544,11 @@ class _Watchdog:
         height = z @ self.masses if self.free else None
         # (array methods: np.max's Python wrapper costs as much as the reduction)
         # (y enters no bound: a sum that NaN or infinity makes non-finite covers it)
+        overlap = self.overlaps.first(poses[1:], t) if self.overlaps is not None else None
         if (move2.max() <= self.move2 and cos_turn.min() >= self.cos_turn
                 and r22.min() > 0.0 and far2.max() <= self.reach2
                 and (height is None or height.max() <= self.z_limit)
-                and math.isfinite(poses[1:, :, 1].sum())):
+                and math.isfinite(poses[1:, :, 1].sum())) and overlap is None:
             return None
         # the same quantities sample by sample, for the first offence and its reason
         finite = np.isfinite(poses[1:]).all(axis=(1, 2))
@@ -539,6 +557,9 @@ class _Watchdog:
         over = r22 <= 0.0
         gain = height > self.z_limit if height is not None else np.zeros(len(t), bool)
         bad = ~finite | far | fast | over.any(axis=1) | gain
+        if overlap is not None and not bad[:overlap[0] + 1].any():
+            j = overlap[0]
+            return j, (Status.UNSTABLE, f"{overlap[1]} at t = {t[j]:.4g} s")
         if not bad.any():
             return None
         j = int(np.argmax(bad))
