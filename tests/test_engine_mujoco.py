@@ -117,6 +117,25 @@ def test_knob_overrides_take_effect() -> None:
         MujocoEngine.settings(no_such_knob=1)
 
 
+def test_noslip_tolerance_reaches_the_model() -> None:
+    # MuJoCo's default no-slip tolerance (1e-6) ends the pass after ~2 iterations (the
+    # sliding cases gave the same trajectories with 20 and 100); 0 runs every one
+    sc = Scenario("resting", B2, duration=0.01)
+    iterations = {}
+    for tol in ("1e-6", "0"):
+        s = MujocoEngine.settings("accurate", noslip_iterations="30", noslip_tolerance=tol)
+        model = mujoco.MjModel.from_xml_string(MujocoEngine().mjcf(sc, s))
+        assert model.opt.noslip_tolerance == float(tol) and model.opt.noslip_iterations == 30
+        data = mujoco.MjData(model)
+        mujoco.mj_step(model, data, 2)  # the first step finds the contacts at zero depth
+        assert data.ncon == 4
+        iterations[tol] = int(data.solver_niter[0])  # main solver + no-slip passes
+    assert MujocoSettings().noslip_tolerance == 1e-6
+    assert iterations["1e-6"] < 10 and iterations["0"] == 31  # measured: 3 and 31
+    with pytest.raises(SettingsError):
+        MujocoEngine.settings(noslip_tolerance=-1e-9)
+
+
 def test_restitution_maps_to_dampratio() -> None:
     assert restitution_dampratio(0.0) == 1.0
     z = restitution_dampratio(0.5)
