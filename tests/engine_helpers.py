@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+from rockbench.analytic import slip_of
 from rockbench.analytic.housner import single_block_reference
 from rockbench.engines import Engine
 from rockbench.runner import ExecutionOptions
@@ -166,3 +167,24 @@ def check_arch_rides_its_supports(engine: Engine, *, rtol: float, turn: float) -
     assert tr.status is Status.OK, tr.message
     np.testing.assert_allclose(tr.x[-1] - tr.x[0], 2 * math.pi * amp, rtol=rtol)
     assert np.max(np.abs(tr.theta - tr.theta[0])) < turn * sc.critical_angle
+
+
+def check_slides_like_coulomb(scenario: Scenario, tr: Trajectory, ref: Trajectory, *,
+                              slip_tol: float = 0.01, rock_tol: float = 0.01) -> None:
+    """A run of a sliding-suite case against the exact Coulomb slider ``ref``.
+
+    Every block's slip (centroid x minus upright x minus u_g) within ``slip_tol`` of the
+    peak exact slip, no rocking beyond ``rock_tol`` λ, and a stack sliding as one body:
+    its top block's slip on the lower one within ``slip_tol`` of the peak exact slip.
+    """
+    assert tr.status is Status.OK, tr.message
+    assert tr.t.size == ref.t.size
+    peak = np.max(np.abs(slip_of(ref, scenario)))
+    for block in range(scenario.n_blocks):
+        error = np.max(np.abs(slip_of(tr, scenario, block) - slip_of(ref, scenario, block))) / peak
+        assert error <= slip_tol, f"block {block + 1}: slip error {error:.2%}"
+    rocking = np.max(np.abs(tr.theta)) / scenario.critical_angle
+    assert rocking <= rock_tol, f"rocks to {rocking:.3g} λ"
+    if scenario.n_blocks == 2:
+        relative = np.max(np.abs(slip_of(tr, scenario, 1) - slip_of(tr, scenario, 0))) / peak
+        assert relative <= slip_tol, f"interface slip {relative:.2%} of the peak slip"

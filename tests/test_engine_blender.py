@@ -16,6 +16,7 @@ from engine_helpers import (
     SINGLE2,
     check_base_follows_excitation,
     check_sine_pulse_peak,
+    check_slides_like_coulomb,
     check_tilting_table,
 )
 
@@ -26,7 +27,15 @@ from rockbench.engines.blender_engine import BLENDER_DEFAULTS, BlenderEngine, Bl
 from rockbench.engines.testing import B2
 from rockbench.errors import EngineUnavailable
 from rockbench.metrics import impact_times
-from rockbench.scenarios import Block, Contact, Scenario, SinePulse, TiltTable, get_scenario
+from rockbench.scenarios import (
+    Block,
+    Contact,
+    Scenario,
+    SinePulse,
+    TiltTable,
+    get_scenario,
+    get_suite,
+)
 from rockbench.scenarios.assembly import Assembly, Support
 from rockbench.trajectory import Status
 
@@ -396,3 +405,28 @@ def test_tilting_table_is_the_base_frame(engine: BlenderEngine) -> None:
 @needs_bpy
 def test_tilting_table_onset_matches_the_collapse_factor() -> None:
     check_tilting_table("blender")
+
+
+# ---------------------------------------------------------------- sliding (exact Coulomb)
+#: Measured at accurate (max |Δs| / max |s_ref|); Blender's Bullet neither converges
+#: with the step nor with the knobs here: on the sine 8.7 % (planar off 15 %, 100
+#: iterations 6.1 %, 40 sub-steps 5.0 %, 4000 fps 7.4 %, motor drive 10 %), on B2 5.5 %
+#: (1.9, 9.1, 4.7, 9.4, 1.5 %), on the stack 0.9 / 1.3 %, its interface 1.6 %.
+BLENDER_SLIDING_KNOWN = {
+    "slide-single-sine-3.0hz-8mm-mu0.15": "slip error 8.7 %: 0.1 mm lost per cycle of the sine, "
+                                          "erratic in the step and the knobs (5-15 %)",
+    "slide-b2-pulse-2.0hz-20mm-mu0.20": "slip error 5.5 %: the block slides 0.78 mm short in its "
+                                        "first slip, erratic in the knobs (1.5-9.4 %)",
+    "slide-stack-pulse-5.0hz-4mm-mu0.10": "interface slip 1.6 % of the peak slip (slip errors "
+                                          "0.9 % / 1.3 %)",
+}
+
+
+@needs_bpy
+@pytest.mark.parametrize("case", [
+    pytest.param(c, marks=(pytest.mark.xfail(strict=True, reason=BLENDER_SLIDING_KNOWN[c]),)
+                 if c in BLENDER_SLIDING_KNOWN else ())
+    for c in get_suite("sliding") if get_scenario(c).contact.interface_friction is None])
+def test_slides_like_the_exact_coulomb_solution(engine: BlenderEngine, case: str) -> None:
+    sc = get_scenario(case)
+    check_slides_like_coulomb(sc, engine.simulate(sc), reference(sc))
