@@ -94,7 +94,7 @@ LADDERS: dict[str, list[dict[str, Any]]] = {
     "mujoco": _steps("timestep", (2e-4, 1e-4, 5e-5, 2.5e-5)),
     "bullet": _steps("substeps", (4, 9, 19, 39)),  # dt = 1 / ((n + 1) 1000 Hz)
     "dart": _steps("timestep", (1e-4, 5e-5, 2.5e-5, 1e-5)),
-    "drake": _steps("timestep", (1e-3, 5e-4, 2.5e-4)),
+    "drake": _steps("timestep", (5e-4, 2.5e-4, 1e-4, 5e-5)),
     "pymunk": _steps("timestep", (1e-4, 5e-5, 2.5e-5, 2e-5, 1e-5)),
 }
 #: Contact knobs varied one at a time at the accurate step (each engine's measured levers).
@@ -111,8 +111,11 @@ KNOBS: dict[str, list[dict[str, Any]]] = {
                {"warm_starting_factor": 0.0}, {"solver_residual_threshold": 1e-7},
                {"solver_residual_threshold": 0.0}],
     "dart": [{"split_impulse": True}],
-    "drake": [{"contact_approximation": "tamsi"}, {"collision_slices": 1},
-              {"contact_approximation": "lagged", "near_rigid_threshold": 0.0}],
+    # the former accurate (SAP, box slices, 1e-5 m) and each of its differences alone
+    "drake": [{"contact_approximation": "sap", "corner_radius": None, "timestep": 2.5e-4,
+               "static_penetration": 1e-5},
+              {"corner_radius": None}, {"contact_approximation": "sap"},
+              {"static_penetration": 1e-5}, {"collision_slices": 1}],
     "pymunk": [{"iterations": 100}],
 }
 

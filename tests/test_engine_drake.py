@@ -21,7 +21,12 @@ from engine_helpers import (  # noqa: E402
 )
 
 from rockbench.engines import SettingsError, engine_class, register, unregister  # noqa: E402
-from rockbench.engines.drake_engine import DrakeEngine, DrakeSettings, prism_obj  # noqa: E402
+from rockbench.engines.drake_engine import (  # noqa: E402
+    DrakeEngine,
+    DrakeSettings,
+    corner_centres,
+    prism_obj,
+)
 from rockbench.scenarios import Contact, Scenario  # noqa: E402
 from rockbench.trajectory import Status  # noqa: E402
 
@@ -164,7 +169,7 @@ class _Geometry(DrakeEngine):
 def test_collision_slices_split_the_block_along_y(n: int) -> None:
     eng = _Geometry()
     sc = Scenario("free-b2-tiny", B2, initial_tilt=0.5, duration=0.01)
-    assert eng.simulate(sc, {"collision_slices": n}).status == Status.OK
+    assert eng.simulate(sc, {"collision_slices": n, "corner_radius": None}).status == Status.OK
     (shapes,) = eng.shapes
     assert len(shapes) == n
     for shape, _ in shapes:
@@ -176,8 +181,72 @@ def test_collision_slices_split_the_block_along_y(n: int) -> None:
     for _, p in shapes:
         assert p[0] == pytest.approx(0.0) and p[2] == pytest.approx(0.0)
     # chamfered prisms are sliced alike: n convex hulls per block
-    eng.simulate(Scenario("stack-tiny", PAPER_STACK, duration=0.01), {"collision_slices": n})
+    eng.simulate(Scenario("stack-tiny", PAPER_STACK, duration=0.01),
+                 {"collision_slices": n, "corner_radius": None})
     assert [len(s) for s in eng.shapes] == [n, n]
+
+
+def test_corner_centres_touch_both_edges() -> None:
+    r = 1e-3
+    # a rectangle: (r, r) inside each corner
+    blk = B2
+    np.testing.assert_allclose(corner_centres(blk.profile(), r),
+                               blk.profile() - np.sign(blk.profile()) * r, atol=1e-15)
+    # a chamfered octagon: every centre is r from both edges at its vertex
+    prof = PAPER_STACK.blocks[0].profile()
+    c = corner_centres(prof, r)
+    for i in range(len(prof)):
+        for j in (i - 1, (i + 1) % len(prof)):
+            e = prof[j] - prof[i]
+            d = c[i] - prof[i]
+            assert abs(e[0] * d[1] - e[1] * d[0]) / np.hypot(*e) == pytest.approx(r, rel=1e-9)
+
+
+def test_corner_spheres_are_the_contact_geometry() -> None:
+    from pydrake.geometry import Sphere
+
+    eng = _Geometry()
+    sc = Scenario("free-b2-tiny", B2, initial_tilt=0.5, duration=0.01)
+    r = 1e-5
+    assert eng.simulate(sc, {"collision_slices": 2, "corner_radius": r}).status == Status.OK
+    (shapes,) = eng.shapes
+    spheres = [p for s, p in shapes if isinstance(s, Sphere)]
+    assert len(shapes) == 2 + 8 and len(spheres) == 8  # 2 slices x (box + 4 corners)
+    assert all(s.radius() == r for s, _ in shapes if isinstance(s, Sphere))
+    expected = sorted((x, y, z) for y in (-0.05, 0.05)
+                      for x, z in corner_centres(B2.profile(), r))
+    np.testing.assert_allclose(sorted(map(tuple, spheres)), expected, atol=1e-12)
+    with pytest.raises(SettingsError):
+        DrakeEngine.settings(corner_radius=0.0)
+    with pytest.raises(SettingsError):
+        DrakeEngine.settings(contact_model="hydroelastic")  # corners need point contact
+    assert DrakeEngine.settings(contact_model="hydroelastic", corner_radius="none") \
+        .corner_radius is None
+
+
+class _Contacts(DrakeEngine):
+    """Counts the contact points at the end of the run."""
+
+    n_contacts = -1
+
+    def _teardown(self) -> None:
+        if self._plant is not None:
+            cr = self._plant.get_contact_results_output_port().Eval(self._pc)
+            self.n_contacts = cr.num_point_pair_contacts()
+        super()._teardown()
+
+
+def test_a_resting_face_is_held_at_both_corners() -> None:
+    # the block's own box gives one point per slice, at one end of the face (the end
+    # flips between steps: the block chatters and creeps when it should stick); its
+    # corner spheres give one point per corner
+    sc = Scenario("b2-rest", B2, duration=0.05)
+    eng = _Contacts()
+    assert eng.simulate(sc, {"corner_radius": None}).status == Status.OK
+    assert eng.n_contacts == 4
+    tr = eng.simulate(sc, "accurate")
+    assert tr.status == Status.OK
+    assert eng.n_contacts == 2 * 4
 
 
 def test_slices_keep_rocking_in_plane() -> None:

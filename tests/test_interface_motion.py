@@ -216,7 +216,6 @@ IF_KNOWN = {
               "the step shrinks (5.6 % at 0.05 ms, 7.7 % at 0.025 ms): Bullet's converged "
               "friction on a mu 0.05 interface does not tend to Coulomb (0.59 % at its early "
               "exit 1e-7 was not convergence)",
-    "drake": "upper-block slip error 18.7 %: it slips 0.0109 m against the exact 0.0119 m",
 }
 
 

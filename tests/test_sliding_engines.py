@@ -47,11 +47,6 @@ ST = "slide-stack-pulse-5.0hz-4mm-mu0.10"
 
 #: (engine, case) → measured reason (slip error as max |Δs| / max |s_ref|).
 KNOWN: dict[tuple[str, str], str] = {
-    ("drake", S3): "slip error 2.8 %: first slip 1.7 % longer, the return 1.2 % shorter",
-    ("drake", S5): "slip error 83 %, rocks to 0.11 λ",
-    ("drake", SS): "slip error 203 %, rocks to 0.18 λ",
-    ("drake", B2): "slip error 5.1 %",
-    ("drake", ST): "slip errors 10 % / 13 %, interface slip 2.1e-3 m",
     ("mujoco", SS): "slip error 195 %, rocks to 0.20 λ: a sliding contact opens at v_n ≈ μ|v_t| "
                     "after each contact step (in contact one step in 26 at 0.3 s), the near-stick "
                     "at 0.70 s ends late (0.8 mm off by 0.75 s) and the one-edge impulses rock it; "

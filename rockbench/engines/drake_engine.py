@@ -12,7 +12,10 @@ Scene (a MultibodyPlant + SceneGraph Diagram stepped by a Simulator)
   :meth:`Block.profile` polygon extruded along y (an in-memory .obj, no file),
   split along y into ``collision_slices`` equal slices (same x–z profile, depth
   depth/N each) so that a rocking edge carries N contact points, not one; the
-  inertia is the full block's.
+  inertia is the full block's. With ``corner_radius`` r (the default), spheres of
+  radius r at the profile's vertices of every slice carry the contact instead:
+  the shape–shape and shape–ground pairs are filtered out, leaving corner–ground and
+  corner–shape pairs (a convex block touches a plane or a convex block at vertices).
 * The ground is a ``Box`` whose top face is the plane z = 0 (a ``HalfSpace``
   gives a single contact point and +9 % on the first rocking peak). In free
   rocking it is welded to the world. Under base excitation it belongs to a heavy
@@ -41,10 +44,27 @@ With one collision shape per block that point flips between the ends of the
 edge: the block wobbles out of plane (up to 0.02 rad), the impact dissipation
 varies by ±0.3 % and mirrored runs differ by 0.02 λ. Slicing the collision
 shape along y gives every slice its own point, so the edge is supported at N
-places symmetric about the mid-plane (4 slices: wobble ≤ 4e-4 rad).
+places symmetric about the mid-plane (4 slices: wobble ≤ 4e-4 rad). The same
+single point also sits at one end of a face resting on the ground or on a block
+(x = ±b/2), and that end flips between steps: the block chatters on alternate
+edges and creeps at saturated friction when it should stick (B2 on μ 0.2 slides
+from t = 0, 5 % slip error; a stack interface stays on one edge, 60–69 % off the
+two-block peaks). Corner spheres give every corner its own point: sliding within
+0.42 % of the exact Coulomb slider, stack pulses within 1.4 %.
+
+SAP's ``"sap"`` approximation (Anitescu's convex relaxation) makes a sliding contact
+separate at v_n = μ|v_t| (measured sep/slip = 0.146 at μ 0.15): the block hops
+every few steps on its leading corners and a μ near b/h rocks it (0.11–0.18 λ).
+With corner spheres ``"similar"`` misses by 1.5–7.6 % (and rocks to 0.2 λ with a
+stiffer contact), ``"lagged"`` by 20–82 %. TAMSI slides like Coulomb friction and,
+unlike SAP (whose near-rigid regime caps the stiffness), takes the stiff contact
+that a block needs not to tilt on its corners as it starts to slide: its slip
+error on the μ 0.15 pulse falls from 4.4 % (static penetration 1e-5 m) to 0.25 %
+(1e-8 m).
 Hydroelastic contact (``contact_model="hydroelastic"``) gives a pressure field
 over the contact patch instead, with compliant blocks of ``hydroelastic_modulus``
-on a rigid ground.
+on a rigid ground (``corner_radius`` None; measured with SAP and box slices: 0.28 %
+on B2's sliding pulse, 4.9 % and 2.7 % on the slender block's, at 5x the cost).
 """
 
 from __future__ import annotations
@@ -90,8 +110,8 @@ class DrakeSettings(EngineSettings):
     contact_approximation : {"sap", "similar", "lagged", "tamsi"}
         ``discrete_contact_approximation``: the first three are solved by SAP
         (convex, with joint locking), ``"tamsi"`` by the older, cheaper TAMSI
-        (deprecated by Drake; kept while it is available because it is ~4x cheaper)
-        solver (deprecated by Drake, removal announced for 2026-09).
+        solver (deprecated by Drake, removal announced for 2026-09; still in 1.51),
+        the only one that slides like Coulomb friction (module docstring).
     contact_model : {"point", "hydroelastic", "hydroelastic_with_fallback"}
         Point contact (one point per geometry pair) or hydroelastic contact
         (a pressure field over the patch; blocks compliant, ground rigid).
@@ -136,29 +156,38 @@ class DrakeSettings(EngineSettings):
         of shapes, so N slices give a rocking edge N points instead of one
         (1 reproduces the single-shape model and its out-of-plane wobble).
         ``static_penetration`` shares the weight among the N contacts.
+    corner_radius : float or None
+        None: the block's shape (box or prism slices) is its collision geometry.
+        A radius r in m: spheres of radius r at the profile's vertices (inset to touch
+        both edges there), one set per slice, are the contact geometry instead: each
+        sphere is its own pair, so a face resting on the ground or on another block
+        is held at both its corners. Point contact only.
 
     Notes
     -----
     Calibrated with ``benchmarks/calibrate_drake.py`` (free rocking B0–B3 over
-    20 s, six Single #2 sine pulses), 4 collision slices. ``accurate`` (SAP,
-    dt 0.25 ms): 0.0003–0.0028 λ, impact times within 0.18 %, pulse peaks within
-    0.55 %, out-of-plane wobble ≤ 4e-4 rad. ``fast`` (TAMSI, dt 0.5 ms, 2
-    slices): ≤ 0.013 λ, impact times within 0.30 %, pulse peaks within 1.74 %,
-    wobble ≤ 0.016 rad; with 4 slices TAMSI's mirrored pulses differ by 0.035 λ
-    (the conformance limit is 0.01 λ; 2 slices: 0.0075 λ). SAP at
-    dt 1 ms costs ~1.5x TAMSI at 0.5 ms and misses the pulse bound (+3.3 % on
-    3.3 Hz / 6 mm), so ``fast`` keeps TAMSI while Drake ships it. With 2 slices
-    the accurate errors are ≤ 0.0029 λ but the wobble reaches 0.012 rad; with 1
-    slice (the single-shape model) B0, B1-0.99 and B2-0.99 miss 5e-3 λ. The
-    near-rigid regime of SAP caps the stiffness, so ``static_penetration`` below
-    ~1e-4 m changes nothing for these blocks; it matters for heavy blocks, which
-    Drake's own estimate (``penetration_allowance``) lets sink by millimetres.
+    20 s, six Single #2 sine pulses) and the ``sliding`` suite against the exact
+    Coulomb slider. ``accurate`` (TAMSI, dt 0.1 ms, corner spheres of 1e-5 m on 4
+    slices, static penetration 1e-8 m): 0.00013–0.0028 λ, impact times within
+    0.057 %, pulse peaks within 0.11 %, no out-of-plane wobble; slip errors
+    0.13–0.42 % of the peak slip, rocking < 1e-6 λ. ``fast`` (dt 0.5 ms, 2 slices):
+    ≤ 0.011 λ except B0 over 20 s (0.037 λ), impact times within 0.32 %, pulse
+    peaks within 0.67 %; slip errors 0.11–0.71 % except the μ 0.15 pulse (1.8 %).
+    A larger corner radius moves the rocking pivot inwards by r (1 mm: B2 and B0
+    5.7e-3 λ off); a softer contact tilts the block on its corners when it starts
+    to slide (static penetration 1e-5 m: slip errors up to 4.4 %). The former
+    ``accurate`` (SAP, dt 0.25 ms, box slices, 1e-5 m) rocked within 0.0028 λ (CPU
+    1.1–1.6x the new one's on single blocks, 0.7–0.8x on stacks) but missed every
+    sliding case (2.8–203 %) and the two-block stack (60–69 %). The near-rigid regime
+    of SAP caps the stiffness, so ``static_penetration`` below ~1e-4 m changes
+    nothing under SAP; it matters for heavy blocks, which Drake's own estimate
+    (``penetration_allowance``) lets sink by millimetres.
     """
 
-    timestep: float = 2.5e-4
-    contact_approximation: Literal["sap", "similar", "lagged", "tamsi"] = "sap"
+    timestep: float = 1.0e-4
+    contact_approximation: Literal["sap", "similar", "lagged", "tamsi"] = "tamsi"
     contact_model: Literal["point", "hydroelastic", "hydroelastic_with_fallback"] = "point"
-    static_penetration: float | None = 1.0e-5
+    static_penetration: float | None = 1.0e-8
     point_stiffness: float | None = None
     penetration_allowance: float = 1.0e-3
     relaxation_time: float | None = None
@@ -169,6 +198,7 @@ class DrakeSettings(EngineSettings):
     hydroelastic_resolution: float = 0.05
     base_velocity_phase: float = 0.5
     collision_slices: int = 4
+    corner_radius: float | None = 1.0e-5
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.timestep) and self.timestep > 0):
@@ -192,6 +222,13 @@ class DrakeSettings(EngineSettings):
                 isinstance(self.collision_slices, int) and self.collision_slices >= 1):
             raise ValueError(f"collision_slices must be an integer >= 1, got "
                              f"{self.collision_slices!r}")
+        if self.corner_radius is not None:
+            if not (math.isfinite(self.corner_radius) and self.corner_radius > 0):
+                raise ValueError(f"corner_radius must be None or finite and > 0, got "
+                                 f"{self.corner_radius!r}")
+            if self.contact_model != "point":
+                raise ValueError("corner_radius needs contact_model 'point' (spheres have "
+                                 "no hydroelastic mesh at that size)")
         if not 0.0 <= self.base_velocity_phase <= 1.0:
             raise ValueError(f"base_velocity_phase must be in [0, 1], got "
                              f"{self.base_velocity_phase!r}")
@@ -210,6 +247,19 @@ def prism_obj(profile: np.ndarray, depth: float) -> str:
         j = (i + 1) % n
         lines.append(f"f {i + 1} {j + 1} {n + j + 1} {n + i + 1}")
     return "\n".join(lines) + "\n"
+
+
+def corner_centres(profile: np.ndarray, r: float) -> np.ndarray:
+    """Centres (x, z) of radius-``r`` spheres touching both edges at each vertex of a
+    convex counter-clockwise polygon: on the inward bisector, r / sin(α/2) from the vertex."""
+    p = np.asarray(profile, float)
+    a = np.roll(p, 1, axis=0) - p  # to the previous vertex
+    b = np.roll(p, -1, axis=0) - p  # to the next one
+    a /= np.linalg.norm(a, axis=1, keepdims=True)
+    b /= np.linalg.norm(b, axis=1, keepdims=True)
+    bis = a + b
+    half = 0.5 * np.arccos(np.clip(np.sum(a * b, axis=1), -1.0, 1.0))
+    return p + bis / np.linalg.norm(bis, axis=1, keepdims=True) * (r / np.sin(half))[:, None]
 
 
 def harmonic_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
@@ -237,18 +287,16 @@ class DrakeEngine(Engine):
     name: ClassVar[str] = "drake"
     capabilities: ClassVar[Capabilities] = Capabilities(
         dimensions=3, max_blocks=None, chamfer=True,
-        # measured by benchmarks/stack_convergence.py: an assembly is many such interfaces
-        no_assemblies="its point contact keeps a block-to-block interface on one edge: the "
-                      "two-block stack's peaks are 60-69 % off at every step (SAP), 33 % "
-                      "(TAMSI), 18 % (hydroelastic)")
+        # measured by benchmarks/stack_convergence.py (accurate: pulses within 1.4 %)
+        no_assemblies="not built: harmonic_frictions and the ground are a stack's; the "
+                      "corner spheres' point contact holds a two-block stack's pulse peaks "
+                      "within 1.4 % (the box shapes': 60-69 % off)")
     Settings: ClassVar[type[EngineSettings]] = DrakeSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
-        # TAMSI is ~4x cheaper per step than SAP; SAP at 1 ms: +3.3 % on a pulse peak.
-        # TAMSI with 4 slices: mirrored 3 Hz / ±8 mm pulses differ by 0.035 λ; 2: 0.0075 λ.
-        # TAMSI's Newton iteration fails on resting stacks of ≥ 4 blocks (a crash, with
-        # Drake's message); SAP (accurate) handles them
-        "fast": {"timestep": 5.0e-4, "contact_approximation": "tamsi", "collision_slices": 2},
+        # 5x the step: free rocking ≤ 0.011 λ (B0 over 20 s 0.037 λ), the μ 0.15
+        # sliding pulse 1.8 % off; 2 slices halve the contact pairs
+        "fast": {"timestep": 5.0e-4, "collision_slices": 2},
     }
     requires: ClassVar[tuple[str, ...]] = ("pydrake",)
     extra: ClassVar[str] = "drake"
@@ -298,7 +346,14 @@ class DrakeEngine(Engine):
         return p
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
-        from pydrake.geometry import Box, Convex, InMemoryMesh
+        from pydrake.geometry import (
+            Box,
+            CollisionFilterDeclaration,
+            Convex,
+            GeometrySet,
+            InMemoryMesh,
+            Sphere,
+        )
         from pydrake.math import RigidTransform, RotationMatrix
         from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
         from pydrake.multibody.tree import PrismaticJoint, SpatialInertia, UnitInertia
@@ -321,7 +376,7 @@ class DrakeEngine(Engine):
             stiction_tolerance=s.stiction_tolerance,
             sap_near_rigid_threshold=s.near_rigid_threshold,
         )
-        plant, _ = AddMultibodyPlant(cfg, builder)
+        plant, scene_graph = AddMultibodyPlant(cfg, builder)
         plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, -scenario.g])
         mu = scenario.contact.friction
         k = s.point_stiffness
@@ -333,6 +388,8 @@ class DrakeEngine(Engine):
         p_blocks = {f: self._proximity(s, f, k, compliant=True) for f in set(mus[1:])}
         p_ground = self._proximity(s, mus[0], k, compliant=False)
         bodies = []
+        shapes, corners = [], []  # geometry ids of the block shapes and corner spheres
+        r = s.corner_radius
         for i, blk in enumerate(blocks):
             p_block = p_blocks[mus[i + 1]]
             inertia = np.asarray(blk.inertia, float) / blk.m
@@ -347,8 +404,13 @@ class DrakeEngine(Engine):
                 shape = Box(blk.width, d, blk.height)
             for j in range(n_sl):
                 y = (j + 0.5) * d - 0.5 * blk.depth
-                plant.RegisterCollisionGeometry(body, RigidTransform([0.0, y, 0.0]), shape,
-                                                f"geom{i}_{j}", p_block)
+                shapes.append(plant.RegisterCollisionGeometry(
+                    body, RigidTransform([0.0, y, 0.0]), shape, f"geom{i}_{j}", p_block))
+                if r is not None:
+                    for k_c, (x, z) in enumerate(corner_centres(blk.profile(), r)):
+                        corners.append(plant.RegisterCollisionGeometry(
+                            body, RigidTransform([x, y, z]), Sphere(r), f"corner{i}_{j}_{k_c}",
+                            p_block))
             bodies.append(body)
         # a ground large enough for the stack, its tilt and the base travel
         ext = scenario.stack.total_height + max(b.width for b in blocks)
@@ -360,19 +422,28 @@ class DrakeEngine(Engine):
         self._exc = scenario.excitation
         self._joint = None
         if scenario.excitation.is_free:
-            plant.RegisterCollisionGeometry(plant.world_body(), x_ground, ground, "ground",
-                                            p_ground)
+            ground_id = plant.RegisterCollisionGeometry(plant.world_body(), x_ground, ground,
+                                                        "ground", p_ground)
         else:
             mb = _BASE_MASS_RATIO * sum(b.m for b in blocks)
             # the inertia is irrelevant (the base only slides) but must be valid
             base = plant.AddRigidBody("base", SpatialInertia(
                 mb, np.zeros(3), UnitInertia.SolidBox(lx, ly, lz)))
-            plant.RegisterCollisionGeometry(base, x_ground, ground, "ground", p_ground)
+            ground_id = plant.RegisterCollisionGeometry(base, x_ground, ground, "ground",
+                                                        p_ground)
             # no position limits (they would pull the base back), no damping
             self._joint = plant.AddJoint(PrismaticJoint(
                 "slide", plant.world_frame(), base.body_frame(), [1.0, 0.0, 0.0],
                 -math.inf, math.inf, 0.0))
         plant.Finalize()
+        if r is not None:
+            # only corner–face pairs remain: a corner on the ground or on another block's
+            # shape (a convex block touches a plane or a convex block at its vertices)
+            manager = scene_graph.collision_filter_manager()
+            manager.Apply(CollisionFilterDeclaration()
+                          .ExcludeWithin(GeometrySet(shapes))
+                          .ExcludeWithin(GeometrySet(corners))
+                          .ExcludeBetween(GeometrySet(shapes), GeometrySet([ground_id])))
         diagram = builder.Build()
         sim = Simulator(diagram)
         root = sim.get_mutable_context()
