@@ -118,7 +118,8 @@ def _axis(key: str, *values: Any) -> tuple[dict[str, Any], ...]:
 GRIDS: dict[str, tuple[tuple[dict[str, Any], ...], ...]] = {
     "pymunk": (_axis("timestep", 1e-3, 5e-4, 2.5e-4, 1e-4, 5e-5, 4e-5, 2.5e-5, 2e-5),
                _axis("iterations", 5, 10, 20)),
-    "dem2d": (({"kn": 1e8, "ks": 1e8}, {"kn": 1e9, "ks": 1e9}),
+    # fast's contact (no stiffer sliding contact), accurate's
+    "dem2d": (({"kn": 1e8, "ks": 1e8, "slip_compliance": None}, {"kn": 1e9, "ks": 1e9}),
               _axis("compliance", 2e-5, 5e-5, 1e-4), _axis("impact_zeta", 2.0, 3.0),
               _axis("safety", 1.0, 2.0)),
     "dart": (_axis("timestep", 1e-3, 5e-4, 2.5e-4, 1e-4, 5e-5, 4e-5, 2.5e-5),
@@ -134,8 +135,8 @@ GRIDS: dict[str, tuple[tuple[dict[str, Any], ...], ...]] = {
     "opensees": (_axis("timestep", 5e-4, 2.5e-4, 1e-4, 5e-5), _axis("contact_frequency",
                                                                       200.0, 500.0, 1000.0),
                  _axis("tolerance", 1e-4, 1e-3)),
-    "drake": (_axis("timestep", 1e-3, 5e-4, 2.5e-4),
-              _axis("contact_approximation", "sap", "similar", "tamsi"),
+    "drake": (_axis("timestep", 1e-3, 5e-4, 2.5e-4, 1e-4),
+              _axis("contact_approximation", "sap", "tamsi"),
               _axis("collision_slices", 2, 4)),
     # fps stays 1000 (the output rate): a lower fps is run as frames of one sub-step at
     # fps · n_s (the same number of Bullet steps, no cheaper), a higher one adds frames
