@@ -12,11 +12,14 @@ pytest.importorskip("pydrake")
 from engine_helpers import (  # noqa: E402
     B2,
     PAPER_STACK,
+    check_arch_rides_its_supports,
     check_b0_impact_times_accurate_and_fast,
     check_b2_free_rocking_accurate,
     check_base_follows_excitation,
     check_paper_stack_under_pulse_runs,
     check_sine_pulse_peak,
+    check_tilting_table,
+    inclined_scene,
     max_error,
 )
 
@@ -24,10 +27,11 @@ from rockbench.engines import SettingsError, engine_class, register, unregister 
 from rockbench.engines.drake_engine import (  # noqa: E402
     DrakeEngine,
     DrakeSettings,
+    assembly_harmonic_frictions,
     corner_centres,
     prism_obj,
 )
-from rockbench.scenarios import Contact, Scenario  # noqa: E402
+from rockbench.scenarios import Contact, Scenario, SinePulse, get_scenario  # noqa: E402
 from rockbench.trajectory import Status  # noqa: E402
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
@@ -257,3 +261,83 @@ def test_slices_keep_rocking_in_plane() -> None:
     assert tr.status == Status.OK
     assert np.max(tr.wobble) < 1e-3
     assert max_error(sc, tr.theta[:, 0]) <= 5e-3
+
+
+# ---------------------------------------------------------------- assemblies
+def test_assembly_frictions_combine_to_the_scenario_values() -> None:
+    def pair(a: float, b: float) -> float:  # Drake's harmonic combination
+        return 2.0 * a * b / (a + b) if a + b > 0 else 0.0
+
+    for mu, mu_if in ((0.8, 0.5), (0.5, 0.8), (0.6, 0.31), (0.0, 0.4), (0.7, 0.7)):
+        base, *blocks = assembly_harmonic_frictions(mu, mu_if, 3)
+        assert all(f >= 0.0 for f in (base, *blocks))
+        for a in blocks:
+            assert pair(base, a) == pytest.approx(mu, rel=1e-12)
+            for b in blocks:
+                assert pair(a, b) == pytest.approx(mu_if, rel=1e-12)
+
+
+def test_interface_friction_at_most_half_the_base_one_is_unsupported() -> None:
+    sc = get_scenario("parapet-offset0.25").replace(duration=0.1)
+    tr = DrakeEngine().simulate(sc.replace(contact=Contact(friction=1.0,
+                                                           interface_friction=0.5)))
+    assert tr.status is Status.UNSUPPORTED and "harmonically" in tr.message
+    ok = DrakeEngine().simulate(sc.replace(contact=Contact(friction=1.0,
+                                                           interface_friction=0.6)))
+    assert ok.status is Status.OK, ok.message
+
+
+# measured (0.5 s, accurate): column 0 λ / 3.2e-6 m (1.1 s CPU), parapet 1e-7 λ / 1.4e-8 m
+# (0.2 s), wall-6x3 1.5e-6 λ / 3.4e-6 m (23 s), the arch 3.0e-5 λ / 3.8e-5 m (3.4 s)
+# (the wall over 0.2 s: 9 s of CPU)
+@pytest.mark.parametrize(("name", "duration", "turn_max", "drift_max"), [
+    ("column-5drums", 0.5, 1e-5, 1e-5),
+    ("parapet-offset0.25", 0.5, 1e-5, 1e-5),
+    ("wall-6x3", 0.2, 1e-5, 1e-5),
+    ("arch-9v-t0.20", 0.5, 1e-4, 1e-4),
+])
+def test_assemblies_stay_at_rest(name: str, duration: float, turn_max: float,
+                                 drift_max: float) -> None:
+    sc = get_scenario(name).replace(duration=duration)
+    tr = DrakeEngine().simulate(sc)
+    assert tr.status is Status.OK, f"{name}: {tr.message}"
+    turn = float(np.max(np.abs(tr.theta - tr.theta[0]))) / sc.critical_angle
+    drift = float(np.max(np.hypot(tr.x - tr.x[0], tr.z - tr.z[0])))
+    assert turn < turn_max and drift < drift_max, f"{name}: turn {turn:.2e} λ, drift {drift:.2e} m"
+    assert np.max(tr.wobble) < 1e-6
+
+
+def test_prism_reads_back_its_own_pose() -> None:
+    # the prism (the turned rectangle, pose angle 0) has a non-zero x–z product of
+    # inertia, which Drake takes in full: it rests and rocks like the turned Block
+    block, prism = (DrakeEngine().simulate(inclined_scene(p)) for p in (False, True))
+    assert block.status is prism.status is Status.OK
+    assert np.max(np.abs(block.theta - 0.1)) < 1e-4
+    assert np.max(np.abs(prism.theta)) < 1e-4
+    assert np.max(np.abs(prism.x - block.x)) < 1e-5 and np.max(np.abs(prism.z - block.z)) < 1e-5
+    pulse = SinePulse(2.0, 0.04)
+    rb, rp = (DrakeEngine().simulate(inclined_scene(p, pulse)) for p in (False, True))
+    peak_b, peak_p = np.max(np.abs(rb.theta - 0.1)), np.max(np.abs(rp.theta))
+    # measured: the prism's peak 1.1e-6 (relative) from the turned block's
+    assert peak_b > 0.05 and peak_p == pytest.approx(peak_b, rel=1e-4)
+
+
+def test_supports_move_with_the_base() -> None:
+    # measured: displacements within 3.5e-4 of 2πA, voussoirs turned by 5.7e-5 λ
+    check_arch_rides_its_supports(DrakeEngine(), rtol=1e-3, turn=2e-4)
+
+
+# measured (accurate, 0.05 /s and 0.025 /s): parapet 0.1310 / 0.1289 against the LP's 0.125
+# (+3.1 %), 5-drum column 0.2486 / 0.2455 against 0.24 (+2.3 %), the LP mechanism (the
+# parapet alone; the column as one body); about 70 s of CPU for the four runs.
+def test_tilting_table_onset_matches_the_collapse_factor() -> None:
+    check_tilting_table("drake")
+
+
+def test_a_step_tamsi_cannot_take_ends_the_run_as_unstable() -> None:
+    # measured: at fast (0.5 ms) TAMSI's Newton iteration fails on the 18-brick wall at
+    # 0.029 s; the run ends with NaN poses, reported as unstable, not as an exception
+    sc = get_scenario("wall-6x3").replace(duration=0.2)
+    tr = DrakeEngine().simulate(sc, "fast")
+    assert tr.status is Status.UNSTABLE and "NaN" in tr.message
+    assert 0.0 < tr.t[-1] < 0.1

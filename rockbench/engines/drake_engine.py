@@ -37,6 +37,15 @@ Scene (a MultibodyPlant + SceneGraph Diagram stepped by a Simulator)
   these compliant contacts are (nearly) plastic, as Housner assumes, and
   scenarios with restitution > 0 are reported unsupported.
 * No damping, no sleeping (Drake has neither).
+* Assemblies: every block, rectangular or a convex prism, is a body at its pose (a
+  prism with its full inertia tensor, whose x–z product is not zero), its corner
+  spheres on every slice; fixed supports are shapes of the ground's body (boxes, or
+  prisms twice the blocks' depth) with corner spheres of their own, so that a block's
+  face on a support's corner has a point too. Frictions by
+  :func:`assembly_harmonic_frictions`: a block may touch the base and other blocks at
+  once, so an interface friction at most half the base's is unsupported. At ``fast``
+  (0.5 ms) TAMSI's Newton iteration fails on larger assemblies (the 18-brick wall
+  at 0.03 s): the run ends there as ``unstable`` (NaN poses, Drake's reason logged).
 
 Drake's point contact between two boxes (or a convex prism and a box) yields a
 single contact point per pair, at one end of the rocking edge (y = ±depth/2).
@@ -79,7 +88,8 @@ import numpy as np
 from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.settings import EngineSettings
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import Scenario
+from rockbench.scenarios import Block, Scenario
+from rockbench.scenarios.assembly import Support
 
 __all__ = ["DrakeEngine", "DrakeSettings"]
 
@@ -91,6 +101,7 @@ class _QuietTamsiDeprecation(logging.Filter):
 
 
 logging.getLogger("drake").addFilter(_QuietTamsiDeprecation())
+_log = logging.getLogger(__name__)
 
 #: Base mass per kg of blocks: the contact reaction barely moves a driven base.
 _BASE_MASS_RATIO = 1.0e6
@@ -262,6 +273,21 @@ def corner_centres(profile: np.ndarray, r: float) -> np.ndarray:
     return p + bis / np.linalg.norm(bis, axis=1, keepdims=True) * (r / np.sin(half))[:, None]
 
 
+def assembly_harmonic_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
+    """Per-geometry coefficients (base and supports first) for the blocks of an assembly.
+
+    A block may touch other blocks and the base at once, and blocks in contact may
+    form odd cycles, so every block takes 1/μ_if (a block pair's a's sum to 2/μ_if)
+    and the base and supports 2/μ − 1/μ_if, which is positive only for μ_if > μ/2
+    (:meth:`DrakeEngine._check_supported` refuses the rest).
+    """
+    if mu_if == mu:
+        return [mu] * (n_blocks + 1)
+    if mu == 0.0:  # a zero coefficient makes every pair it is in frictionless
+        return [0.0] + [mu_if] * n_blocks
+    return [mu * mu_if / (2.0 * mu_if - mu)] + [mu_if] * n_blocks
+
+
 def harmonic_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
     """Per-geometry coefficients (ground first) that Drake combines into μ and μ_if.
 
@@ -286,11 +312,7 @@ class DrakeEngine(Engine):
 
     name: ClassVar[str] = "drake"
     capabilities: ClassVar[Capabilities] = Capabilities(
-        dimensions=3, max_blocks=None, chamfer=True,
-        # measured by benchmarks/stack_convergence.py (accurate: pulses within 1.4 %)
-        no_assemblies="not built: harmonic_frictions and the ground are a stack's; the "
-                      "corner spheres' point contact holds a two-block stack's pulse peaks "
-                      "within 1.4 % (the box shapes': 60-69 % off)")
+        dimensions=3, max_blocks=None, chamfer=True, assemblies=True)
     Settings: ClassVar[type[EngineSettings]] = DrakeSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
@@ -320,6 +342,12 @@ class DrakeEngine(Engine):
                 "drake's compliant contact has no restitution coefficient (impacts are "
                 f"plastic); restitution {scenario.contact.restitution} cannot be modelled"
             )
+        mu, mu_if = scenario.contact.friction, scenario.contact.block_friction
+        if scenario.is_assembly and 0.0 < mu and mu_if <= 0.5 * mu:
+            raise UnsupportedScenario(
+                f"drake combines two geometries' frictions harmonically (2 μ₁μ₂/(μ₁ + μ₂)): "
+                f"an assembly's blocks get interface friction {mu_if:g} next to base friction "
+                f"{mu:g} only when the interface's exceeds half the base's")
 
     def _proximity(self, s: DrakeSettings, friction: float, stiffness: float | None,
                    compliant: bool) -> Any:
@@ -384,7 +412,9 @@ class DrakeEngine(Engine):
         if k is None and s.static_penetration is not None:
             # the weight is shared by the n_sl slices' contacts along the rocking edge
             k = 2.0 * sum(b.m for b in blocks) * scenario.g / (n_sl * s.static_penetration)
-        mus = harmonic_frictions(mu, scenario.contact.block_friction, len(blocks))
+        assembly = scenario.is_assembly
+        combine = assembly_harmonic_frictions if assembly else harmonic_frictions
+        mus = combine(mu, scenario.contact.block_friction, len(blocks))
         p_blocks = {f: self._proximity(s, f, k, compliant=True) for f in set(mus[1:])}
         p_ground = self._proximity(s, mus[0], k, compliant=False)
         bodies = []
@@ -392,12 +422,15 @@ class DrakeEngine(Engine):
         r = s.corner_radius
         for i, blk in enumerate(blocks):
             p_block = p_blocks[mus[i + 1]]
-            inertia = np.asarray(blk.inertia, float) / blk.m
-            body = plant.AddRigidBody(
-                f"block{i}", SpatialInertia(blk.m, np.zeros(3), UnitInertia(*inertia)))
+            if isinstance(blk, Block):
+                unit = UnitInertia(*(np.asarray(blk.inertia, float) / blk.m))
+            else:  # a prism's x–z product of inertia is not zero: its full tensor
+                t = blk.inertia_tensor / blk.m
+                unit = UnitInertia(t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[0, 2], t[1, 2])
+            body = plant.AddRigidBody(f"block{i}", SpatialInertia(blk.m, np.zeros(3), unit))
             # n_sl slices along y, each with one contact point per pair of shapes
             d = blk.depth / n_sl
-            if blk.chamfer > 0:
+            if blk.chamfer > 0 or not isinstance(blk, Block):
                 obj = MemoryFile(prism_obj(blk.profile(), d), ".obj", f"prism{i}.obj")
                 shape = Convex(InMemoryMesh(mesh_file=obj))
             else:
@@ -414,6 +447,8 @@ class DrakeEngine(Engine):
             bodies.append(body)
         # a ground large enough for the stack, its tilt and the base travel
         ext = scenario.stack.total_height + max(b.width for b in blocks)
+        if assembly:  # wide scenes: the blocks' spread along x too
+            ext += scenario.stack.reach + scenario.stack.size
         lx = 2.0 * (2.0 * ext + 2.0 * scenario.excitation.motion_bounds(scenario.duration)[0] + 1.0)
         ly = 2.0 * (2.0 * max(b.depth for b in blocks) + 0.5)
         lz = 2.0 * (0.25 * ext + 0.1)
@@ -422,19 +457,34 @@ class DrakeEngine(Engine):
         self._exc = scenario.excitation
         self._joint = None
         if scenario.excitation.is_free:
-            ground_id = plant.RegisterCollisionGeometry(plant.world_body(), x_ground, ground,
-                                                        "ground", p_ground)
+            anchor = plant.world_body()  # the body of the ground and supports
+            ground_id = plant.RegisterCollisionGeometry(anchor, x_ground, ground, "ground",
+                                                        p_ground)
         else:
             mb = _BASE_MASS_RATIO * sum(b.m for b in blocks)
             # the inertia is irrelevant (the base only slides) but must be valid
             base = plant.AddRigidBody("base", SpatialInertia(
                 mb, np.zeros(3), UnitInertia.SolidBox(lx, ly, lz)))
+            anchor = base
             ground_id = plant.RegisterCollisionGeometry(base, x_ground, ground, "ground",
                                                         p_ground)
             # no position limits (they would pull the base back), no damping
             self._joint = plant.AddJoint(PrismaticJoint(
                 "slide", plant.world_frame(), base.body_frame(), [1.0, 0.0, 0.0],
                 -math.inf, math.inf, 0.0))
+        # an assembly's supports: shapes of the ground's body (welded to the moving base)
+        depth = max(b.depth for b in blocks)
+        for k_s, sup in enumerate(getattr(scenario.stack, "supports", ())):
+            shapes.append(self._add_support(plant, anchor, sup, depth, p_ground,
+                                            f"support{k_s}"))
+            if r is not None:  # its corners on block faces, as the blocks' on its faces
+                d = depth / n_sl
+                for j in range(n_sl):
+                    y = (j + 0.5) * d - 0.5 * depth
+                    for k_c, (x, z) in enumerate(corner_centres(sup.array, r)):
+                        corners.append(plant.RegisterCollisionGeometry(
+                            anchor, RigidTransform([x, y, z]), Sphere(r),
+                            f"support{k_s}_corner{j}_{k_c}", p_ground))
         plant.Finalize()
         if r is not None:
             # only corner–face pairs remain: a corner on the ground or on another block's
@@ -449,9 +499,9 @@ class DrakeEngine(Engine):
         root = sim.get_mutable_context()
         pc = plant.GetMyMutableContextFromRoot(root)
         centroids, th = scenario.initial_poses()
-        rot = RotationMatrix.MakeYRotation(th)
-        for body, c in zip(bodies, centroids, strict=True):
-            plant.SetFreeBodyPose(pc, body, RigidTransform(rot, [c[0], 0.0, c[1]]))
+        for body, c, a in zip(bodies, centroids, th + scenario.block_angles, strict=True):
+            plant.SetFreeBodyPose(pc, body, RigidTransform(RotationMatrix.MakeYRotation(a),
+                                                           [c[0], 0.0, c[1]]))
         sim.Initialize()
         # discrete state = [q; v]; a free body's q is (qw, qx, qy, qz, x, y, z)
         self._state = pc.get_discrete_state(0)
@@ -461,10 +511,34 @@ class DrakeEngine(Engine):
         self._plant, self._pc, self._sim, self._diagram = plant, pc, sim, diagram
         self._dt = float(s.timestep)
         self._steps = 0
+        self._failed = False
         self._phase = s.base_velocity_phase
         self._sap = s.contact_approximation != "tamsi"
         self._chunk_start = -1
         return self._dt
+
+    @staticmethod
+    def _add_support(plant: Any, body: Any, sup: Support, depth: float, props: Any,
+                     name: str) -> Any:
+        """Register a fixed support's shape on the base ``body``, twice ``depth`` deep:
+        a ``Box`` if it is an axis-aligned rectangle, else the ``Convex`` of its prism."""
+        from pydrake.geometry import Box, Convex, InMemoryMesh
+        from pydrake.math import RigidTransform
+
+        try:
+            from pydrake.common import MemoryFile
+        except ImportError:  # older layout
+            from pydrake.geometry import MemoryFile  # type: ignore[no-redef]
+
+        v = sup.array
+        lo, hi = v.min(axis=0), v.max(axis=0)
+        if len(v) == 4 and all(len(set(col)) == 2 for col in v.T.tolist()):
+            shape = Box(float(hi[0] - lo[0]), 2.0 * depth, float(hi[1] - lo[1]))
+            pose = RigidTransform([0.5 * float(lo[0] + hi[0]), 0.0, 0.5 * float(lo[1] + hi[1])])
+        else:  # vertices in the base's frame (world coordinates at t = 0)
+            obj = MemoryFile(prism_obj(v, 2.0 * depth), ".obj", f"{name}.obj")
+            shape, pose = Convex(InMemoryMesh(mesh_file=obj)), RigidTransform()
+        return plant.RegisterCollisionGeometry(body, pose, shape, name, props)
 
     # ------------------------------------------------------------------ drive
     def _load_chunk(self, i0: int) -> None:
@@ -494,11 +568,24 @@ class DrakeEngine(Engine):
 
     # ------------------------------------------------------------------ step/read
     def _advance(self, n: int) -> None:
+        if self._failed:
+            return
         self._steps += n
-        self._sim.AdvanceTo(self._steps * self._dt)
+        try:
+            self._sim.AdvanceTo(self._steps * self._dt)
+        except RuntimeError as exc:
+            if "failed to converge" not in str(exc):
+                raise
+            # TAMSI's Newton iteration did not converge (a step too long for the stiff
+            # contact): the run ends as unstable (NaN poses), Drake's reason logged
+            _log.warning("drake: %s", str(exc).split(". ", 1)[0])
+            self._failed = True
 
     def _read_poses(self) -> np.ndarray:
-        np.take(self._state.value(), self._idx, out=self._poses)
+        if self._failed:
+            self._poses.fill(math.nan)
+        else:
+            np.take(self._state.value(), self._idx, out=self._poses)
         return self._poses
 
     def _teardown(self) -> None:
