@@ -2,13 +2,16 @@
 
 ``python -m benchmarks.stack_convergence [--quick] [--engines a,b] [--out FILE]``
 
-For each 3D engine (MuJoCo, Bullet, DART, Drake) and pymunk, the time step is
-refined from coarse to fine, the other knobs at their ``accurate`` values, until
-the results stop changing (converged: the worst peak errors move by less than
+For each 3D engine (MuJoCo, Bullet, DART, Drake, Blender, LMGC90) and pymunk, the
+time step is refined from coarse to fine, the other knobs at their ``accurate``
+values, until the results stop changing (converged: the worst peak errors move by less than
 :data:`CONVERGED` between two steps) or a step costs more than the cap; then the
 contact knobs that matter are varied one at a time at the ``accurate`` step.
 Cases: the eight stack pulses (4 s) and the two well-posed stack sinusoids
 (5 Hz / 2 mm and 4 mm, 10 s; the other six are chaotic, see issue 15).
+Blender and LMGC90 live in environments of their own (``.ci/run``): run their rows
+there, e.g. ``.venv-blender/bin/python -m benchmarks.stack_convergence --engines
+blender --out FILE``, and copy the rows into RESULTS.md.
 
 Per engine and setting it records, against the analytic two-block solution:
 the worst relative error of either block's peak |θ|/λ over the pulses whose
@@ -94,8 +97,11 @@ LADDERS: dict[str, list[dict[str, Any]]] = {
     "mujoco": _steps("timestep", (2e-4, 1e-4, 5e-5, 2.5e-5)),
     "bullet": _steps("substeps", (4, 9, 19, 39)),  # dt = 1 / ((n + 1) 1000 Hz)
     "dart": _steps("timestep", (1e-4, 5e-5, 2.5e-5, 1e-5)),
-    "drake": _steps("timestep", (5e-4, 2.5e-4, 1e-4, 5e-5)),
+    "drake": _steps("timestep", (2.5e-4, 1e-4, 5e-5, 2.5e-5)),
     "pymunk": _steps("timestep", (1e-4, 5e-5, 2.5e-5, 2e-5, 1e-5)),
+    # dt = 1 / (1000 substeps) s; each in its own environment (see the README)
+    "blender": _steps("substeps_per_frame", (5, 10, 20, 40)),
+    "lmgc90": _steps("timestep", (2e-4, 1e-4, 5e-5, 2.5e-5)),
 }
 #: Contact knobs varied one at a time at the accurate step (each engine's measured levers).
 KNOBS: dict[str, list[dict[str, Any]]] = {
@@ -111,12 +117,19 @@ KNOBS: dict[str, list[dict[str, Any]]] = {
                {"warm_starting_factor": 0.0}, {"solver_residual_threshold": 1e-7},
                {"solver_residual_threshold": 0.0}],
     "dart": [{"split_impulse": True}],
-    # the former accurate (SAP, box slices, 1e-5 m) and each of its differences alone
+    # the two former accurate presets (SAP with box slices at 0.25 ms; TAMSI with Drake's
+    # dissipation at 0.1 ms), the dissipation, then the contact's other differences alone
     "drake": [{"contact_approximation": "sap", "corner_radius": None, "timestep": 2.5e-4,
-               "static_penetration": 1e-5},
+               "static_penetration": 1e-5, "hunt_crossley_dissipation": None},
+              {"timestep": 1e-4, "hunt_crossley_dissipation": None},
+              {"hunt_crossley_dissipation": None}, {"hunt_crossley_dissipation": 100.0},
+              {"hunt_crossley_dissipation": 300.0},
+              {"hunt_crossley_dissipation": None, "stiction_tolerance": 1e-6},
               {"corner_radius": None}, {"contact_approximation": "sap"},
               {"static_penetration": 1e-5}, {"collision_slices": 1}],
     "pymunk": [{"iterations": 100}],
+    "blender": [{"solver_iterations": 50}, {"use_split_impulse": False}, {"planar": False}],
+    "lmgc90": [{"theta": 1.0}],
 }
 
 
@@ -129,12 +142,13 @@ contact data). MuJoCo (convex prism meshes, multiccd): the 4 corners of the inte
 1e-2 rad); without multiccd 1 point at the face centre (pulses 9.9 % off). Bullet: the convex
 hulls keep **1** point, at the face centre, with or without SAT; the narrow box (width
 w − 2c, the chamfered prism's flat faces) collided box–box gives the 4 corners: stack pulses
-20 % → 0.85 % (with a 0.1 mm breaking threshold; 3.7 % at 1 mm). Drake point contact, 4
-slices: 7 point pairs across the interface, **every one at x = +0.07 m** (the +x edge,
-depth 2.1e-5 m), none on the −x edge: the upper block rests on one edge and does not lift
-as the reference does (5 Hz / 4 mm pulse: top peak −69 %). Splitting each slice into x
-halves (the +x half turned by π about z) does not move them: the halves' points sit at
-x = 0 and x = +0.07 m. DART (narrow box): box–box.
+20 % → 0.85 % (with a 0.1 mm breaking threshold; 3.7 % at 1 mm). Drake point contact
+between box slices (4): 7 point pairs across the interface, **every one at x = +0.07 m**
+(the +x edge, depth 2.1e-5 m), none on the −x edge: the upper block rested on one edge and
+did not lift as the reference does (5 Hz / 4 mm pulse: top peak −69 %); splitting each slice
+into x halves did not move them. Spheres of 1e-5 m at every corner of every slice
+(`corner_radius`, the presets since) give each corner its own pair: both edges carry the
+block. DART (narrow box): box–box. LMGC90 (polyhedra): the 4 corners of the face.
 
 **Verdicts.** pymunk converges (pulses ≤ 0.5 % from 0.025 ms, sines 3.2 % at 0.025 ms and
 ≤ 1.7 % from 0.02 ms on; 0.01 ms: 0.15 % / 1.2 %): `accurate` is 0.025 ms (the cheapest
@@ -162,10 +176,28 @@ stays within 1.1 % at 0.1, 0.05 and 0.025 ms and for ζ from 1.5 to 4; the 2 mm 
 between +2 % and −6.5 / +12.7 % with the step, as its own reference does under input
 perturbations (top peak +3.3 % at 1e-6, ±5–6 % at 1e-4, −8.6 / +7.5 % at 1e-3 of the
 amplitude; the 4 mm reference moves < 0.7 % up to 1e-3). 0.2 ms is too coarse (39 %).
-Drake cannot: SAP 60–69 % on the pulses
-at every step from 1 to 0.125 ms and for a 10× stiffer contact (identical results: SAP's
-near-rigid regularisation caps the stiffness); TAMSI 33 %, lagged SAP without the near-rigid
-cap 16 % (sines 42 %), hydroelastic contact 18 % (2 pulses, 34 s CPU each), one slice 30 %.
+Drake with box slices could not: SAP 60–69 % on the pulses at every step from 1 to 0.125 ms
+and for a 10× stiffer contact (SAP's near-rigid regularisation caps the stiffness); TAMSI
+33 %, lagged SAP without the near-rigid cap 16 % (sines 42 %), hydroelastic contact 18 %.
+With corner spheres and TAMSI (stiff contact, 1e-8 m) the pulses converge (1.4 % at 0.1 ms,
+0.7 % at 0.05 ms with Drake's default dissipation) but the sinusoids did not (39 / 32 %):
+a corner landing on the lower block bounced off and the interface crept by 1.3–1.9 mm
+(a stiction tolerance of 1e-6 m/s cut the creep to 0.5 mm, sines still 45 %). A
+Hunt–Crossley dissipation of 1000 s/m makes that impact plastic: interface slip 2e-6 m,
+and from 0.05 ms (`accurate`) both limits are met and the errors shrink with the step
+(0.025 ms: 0.16 % / 1.6 %). At 0.1 ms the 4 mm sinusoid still takes the other branch
+(−40 %); 100 and 300 s/m pick either branch with the step.
+Blender (Bullet 2.x in single precision, planar blocks) does not converge: the pulses are
+16 / 5.9 / 12 / 7.7 % and the sinusoids 32 / 33 / 6.2 / 35 % from 0.2 to 0.025 ms, with no
+trend; 50 iterations 6.4 / 7.4 %; free 3D blocks 14 / 40 % with 2.8 mm of interface slip.
+Its knobs are the ones Blender exposes (rate, sub-steps, iterations, split impulse, shape,
+margin): Bullet's contact breaking threshold and solver residual, which made pybullet
+converge on the pulses, are out of its reach. LMGC90 (non-smooth contact: interface slip
+< 1e-6 m) converges slowly on the pulses (18 / 6.0 / 3.1 % at 0.2 / 0.1 / 0.05 ms; 0.025 ms
+costs more than the cap) but moves away on the 4 mm sinusoid (−2 / −21 / −31 %); θ = 1
+changes nothing. Its impacts keep more energy than Housner's η (effective restitution 0.716
+against 0.700 on B2, the conformance kit's strict expected failure), and the binding does
+not expose the solver relaxation that sets it.
 The 5 Hz / 4 mm sinusoid is well-posed for the reference but not for engines: every engine at
 0.1 ms departs from it at 0.97 s, all in the same way (pymunk, DART and MuJoCo at ζ = 1 agree
 with each other there; MuJoCo at ζ = 3 does not depart), and small modelling changes pick one
@@ -307,7 +339,7 @@ def markdown(rows: list[Row], names: list[str], header: str = "") -> str:
 
 def run(quick: bool = False, engines: list[str] | None = None) -> tuple[str, dict]:
     """Markdown section and raw rows (the interface of the ``benchmarks`` sections)."""
-    wanted = engines or ["mujoco", "bullet", "dart", "drake", "pymunk"]
+    wanted = engines or list(LADDERS)
     avail = [e for e in wanted if engine_status(e)[0]]
     missing = [e for e in wanted if e not in avail]
     start, load0 = time.perf_counter(), load()
@@ -338,7 +370,7 @@ def main(argv: list[str] | None = None) -> int:
                                  description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true",
                     help="three pulses and one sinusoid, three steps, one knob per engine")
-    ap.add_argument("--engines", default="mujoco,bullet,dart,drake,pymunk",
+    ap.add_argument("--engines", default=",".join(LADDERS),
                     help="comma list of engines")
     ap.add_argument("--out", type=Path, default=HERE / "RESULTS.md",
                     help="Markdown file whose stack-convergence section is replaced")

@@ -17,6 +17,7 @@ from engine_helpers import (
     check_base_follows_excitation,
     check_sine_pulse_peak,
     check_slides_like_coulomb,
+    check_stack_follows_two_block,
     check_tilting_table,
 )
 
@@ -430,3 +431,19 @@ BLENDER_SLIDING_KNOWN = {
 def test_slides_like_the_exact_coulomb_solution(engine: BlenderEngine, case: str) -> None:
     sc = get_scenario(case)
     check_slides_like_coulomb(sc, engine.simulate(sc), reference(sc))
+
+
+# benchmarks/stack_convergence.py (accurate, Δt 0.1 ms): the 5 Hz / 4 mm pulse's peaks
+# +0.3 / −0.9 %, interface slip up to 2.2e-4 m over the ten stack cases; the sinusoid
+# erratic in the step (−33 / −0.8 / −35 % at 0.1 / 0.05 / 0.025 ms) and in every knob bpy
+# exposes
+@needs_bpy
+@pytest.mark.parametrize("case, tol", [
+    ("stack-pulse-5.0hz-4mm", 0.02),
+    pytest.param("stack-sine-5.0hz-4mm", 0.05, marks=pytest.mark.xfail(
+        strict=True, reason="peaks −33 / −21 % of the two-block solution at 0.1 ms, erratic "
+                            "in the step and knobs (benchmarks/stack_convergence.py)")),
+])
+def test_stack_follows_the_two_block_solution(engine: BlenderEngine, case: str,
+                                              tol: float) -> None:
+    check_stack_follows_two_block(engine, case, tol, slip=5e-4, gap=1e-4)

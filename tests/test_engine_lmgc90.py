@@ -13,6 +13,7 @@ from engine_helpers import (
     check_arch_rides_its_supports,
     check_base_follows_excitation,
     check_sine_pulse_peak,
+    check_stack_follows_two_block,
     check_tilting_table,
     inclined_scene,
 )
@@ -262,3 +263,20 @@ def test_interface_friction_in_an_assembly_is_unsupported(engine: Lmgc90Engine) 
 @needs_lmgc90
 def test_tilting_table_onset_matches_the_collapse_factor() -> None:
     check_tilting_table("lmgc90", overshoot=0.045)
+
+
+# benchmarks/stack_convergence.py (accurate, Δt 0.1 ms): the 5 Hz / 4 mm pulse's peaks
+# −0.5 / −0.4 %, interface slip < 1e-6 m (non-smooth contact); the sinusoid moves away as
+# the step shrinks (−2 / −21 / −31 % at 0.2 / 0.1 / 0.05 ms): LMGC90's impacts keep more
+# energy than Housner's η
+@needs_lmgc90
+@pytest.mark.parametrize("case, tol", [
+    ("stack-pulse-5.0hz-4mm", 0.02),
+    pytest.param("stack-sine-5.0hz-4mm", 0.05, marks=pytest.mark.xfail(
+        strict=True, reason="bottom block's peak −21 % of the two-block solution at 0.1 ms, "
+                            "−31 % at 0.05 ms: its impacts keep more energy than Housner's "
+                            "eta (benchmarks/stack_convergence.py)")),
+])
+def test_stack_follows_the_two_block_solution(engine: Lmgc90Engine, case: str,
+                                              tol: float) -> None:
+    check_stack_follows_two_block(engine, case, tol, slip=1e-5, gap=2e-5)
