@@ -7,6 +7,7 @@ and pulse checks against Housner that several engines pass alike.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -105,6 +106,20 @@ def check_paper_stack_under_pulse_runs(engine: Engine) -> None:
     assert np.all(np.isfinite(tr.theta))
     # both blocks travel with the base (displacement 2πA after the pulse)
     np.testing.assert_allclose(tr.x[-1] - tr.x[0], 2 * math.pi * 0.004, atol=5e-3)
+
+
+def check_assembly_stays_at_rest(engine: Engine, name: str, *, duration: float, turn: float,
+                                 drift: float, settings: Any = None) -> Trajectory:
+    """Catalog assembly ``name`` left alone for ``duration`` s: every block turns by less
+    than ``turn`` λ and its centroid drifts by less than ``drift`` m from its first pose."""
+    sc = get_scenario(name).replace(duration=duration)
+    tr = engine.simulate(sc, settings)
+    assert tr.status is Status.OK, f"{name}: {tr.message}"
+    turned = float(np.max(np.abs(tr.theta - tr.theta[0]))) / sc.critical_angle
+    drifted = float(np.max(np.hypot(tr.x - tr.x[0], tr.z - tr.z[0])))
+    assert turned < turn and drifted < drift, \
+        f"{name}: turn {turned:.2e} λ, drift {drifted:.2e} m"
+    return tr
 
 
 def check_stack_follows_two_block(engine: Engine, case: str, tol: float, *, slip: float,

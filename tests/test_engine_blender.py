@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from engine_helpers import (
     SINGLE2,
+    check_assembly_stays_at_rest,
     check_base_follows_excitation,
     check_sine_pulse_peak,
     check_slides_like_coulomb,
@@ -328,12 +329,7 @@ def test_assemblies_of_boxes_stay_at_rest(engine: BlenderEngine) -> None:
     # box-box contacts: a column, a parapet on its wall and a running-bond wall keep their
     # poses (measured: ≤ 9e-7 λ and 5.3e-6 m over 0.5 s)
     for name in ("column-5drums", "parapet-offset0.25", "wall-6x3"):
-        sc = get_scenario(name).replace(duration=0.5)
-        tr = engine.simulate(sc)
-        assert tr.status is Status.OK, f"{name}: {tr.message}"
-        turn = float(np.max(np.abs(tr.theta - tr.theta[0]))) / sc.critical_angle
-        drift = float(np.max(np.hypot(tr.x - tr.x[0], tr.z - tr.z[0])))
-        assert turn < 1e-5 and drift < 2e-5, f"{name}: turn {turn:.2e} λ, drift {drift:.2e} m"
+        check_assembly_stays_at_rest(engine, name, duration=0.5, turn=1e-5, drift=2e-5)
 
 
 @needs_bpy

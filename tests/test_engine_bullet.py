@@ -11,6 +11,7 @@ pytest.importorskip("pybullet")
 
 from engine_helpers import (  # noqa: E402
     check_arch_rides_its_supports,
+    check_assembly_stays_at_rest,
     check_tilting_table,
     inclined_scene,
     zero_crossings,
@@ -185,12 +186,7 @@ def test_assemblies_of_boxes_stay_at_rest(engine: BulletEngine) -> None:
     # box-box contacts (four corner points per face from the first step): a column, a
     # parapet on its wall and a running-bond wall keep their poses to 1e-5 λ and 20 µm
     for name in ("column-5drums", "parapet-offset0.25", "wall-6x3"):
-        sc = get_scenario(name).replace(duration=0.5)
-        tr = engine.simulate(sc)
-        assert tr.status is Status.OK, f"{name}: {tr.message}"
-        turn = float(np.max(np.abs(tr.theta - tr.theta[0]))) / sc.critical_angle
-        drift = float(np.max(np.hypot(tr.x - tr.x[0], tr.z - tr.z[0])))
-        assert turn < 1e-4 and drift < 2e-5, f"{name}: turn {turn:.2e} λ, drift {drift:.2e} m"
+        check_assembly_stays_at_rest(engine, name, duration=0.5, turn=1e-4, drift=2e-5)
 
 
 def test_principal_frame_of_an_isosceles_right_triangle() -> None:

@@ -14,6 +14,7 @@ from engine_helpers import (  # noqa: E402, E501
     B2,
     PAPER_STACK,
     SINGLE2,
+    check_assembly_stays_at_rest,
     check_tilting_table,
     inclined_scene,
     zero_crossings,
@@ -195,12 +196,8 @@ def test_assemblies_of_boxes_stay_at_rest() -> None:
     # fast preset (ODE, 1 ms): a column and a parapet on its wall keep their poses
     # (measured 5e-6 λ and 2.5e-7 λ, 1.7 µm and the first step's 9.8 µm sink)
     for name in ("column-5drums", "parapet-offset0.25"):
-        sc = get_scenario(name).replace(duration=1.0)
-        tr = DartEngine().simulate(sc, "fast")
-        assert tr.status is Status.OK, f"{name}: {tr.message}"
-        turn = float(np.max(np.abs(tr.theta - tr.theta[0]))) / sc.critical_angle
-        drift = float(np.max(np.hypot(tr.x - tr.x[0], tr.z - tr.z[0])))
-        assert turn < 1e-4 and drift < 2e-5, f"{name}: turn {turn:.2e} λ, drift {drift:.2e} m"
+        check_assembly_stays_at_rest(DartEngine(), name, duration=1.0, turn=1e-4, drift=2e-5,
+                                     settings="fast")
 
 
 def test_prism_reads_back_its_own_pose_and_rocks_like_the_block() -> None:

@@ -13,6 +13,7 @@ from engine_helpers import (  # noqa: E402
     B2,
     PAPER_STACK,
     check_arch_rides_its_supports,
+    check_assembly_stays_at_rest,
     check_b0_impact_times_accurate_and_fast,
     check_b2_free_rocking_accurate,
     check_base_follows_excitation,
@@ -308,12 +309,8 @@ def test_interface_friction_at_most_half_the_base_one_is_unsupported() -> None:
 ])
 def test_assemblies_stay_at_rest(name: str, duration: float, turn_max: float,
                                  drift_max: float) -> None:
-    sc = get_scenario(name).replace(duration=duration)
-    tr = DrakeEngine().simulate(sc)
-    assert tr.status is Status.OK, f"{name}: {tr.message}"
-    turn = float(np.max(np.abs(tr.theta - tr.theta[0]))) / sc.critical_angle
-    drift = float(np.max(np.hypot(tr.x - tr.x[0], tr.z - tr.z[0])))
-    assert turn < turn_max and drift < drift_max, f"{name}: turn {turn:.2e} λ, drift {drift:.2e} m"
+    tr = check_assembly_stays_at_rest(DrakeEngine(), name, duration=duration, turn=turn_max,
+                                      drift=drift_max)
     assert np.max(tr.wobble) < 1e-6
 
 
