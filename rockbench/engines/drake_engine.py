@@ -196,9 +196,8 @@ class DrakeSettings(EngineSettings):
     5.7e-3 λ off); a softer contact tilts the block on its corners when it starts
     to slide (static penetration 1e-5 m: slip errors up to 4.4 %). The former
     ``accurate`` (TAMSI at 0.1 ms with Drake's dissipation) held the stack pulses to
-    1.4 % but not the sinusoids (39 %). The one before (SAP, dt 0.25 ms, box slices,
-    1e-5 m) rocked within 0.0028 λ (CPU
-    1.1–1.6x the new one's on single blocks, 0.7–0.8x on stacks) but missed every
+    1.4 % but not the sinusoids (39 %), at half the present cost. The one before
+    (SAP, dt 0.25 ms, box slices, 1e-5 m) rocked within 0.0028 λ but missed every
     sliding case (2.8–203 %) and the two-block stack (60–69 %). The near-rigid regime
     of SAP caps the stiffness, so ``static_penetration`` below ~1e-4 m changes
     nothing under SAP; it matters for heavy blocks, which Drake's own estimate
