@@ -282,6 +282,31 @@ def corner_centres(profile: np.ndarray, r: float) -> np.ndarray:
     return p + bis / np.linalg.norm(bis, axis=1, keepdims=True) * (r / np.sin(half))[:, None]
 
 
+def _convex_prism(profile: np.ndarray, depth: float, name: str) -> Any:
+    """Drake ``Convex`` shape of ``profile`` (x, z) extruded over ``depth``, from memory."""
+    from pydrake.geometry import Convex, InMemoryMesh
+
+    try:
+        from pydrake.common import MemoryFile
+    except ImportError:  # older layout
+        from pydrake.geometry import MemoryFile  # type: ignore[no-redef]
+
+    return Convex(InMemoryMesh(mesh_file=MemoryFile(prism_obj(profile, depth), ".obj",
+                                                    f"{name}.obj")))
+
+
+def _add_corners(plant: Any, body: Any, profile: np.ndarray, y: float, r: float,
+                 props: Any, name: str) -> list[Any]:
+    """Register spheres of radius ``r`` at the corners of ``profile`` (inset to touch both
+    edges) on ``body`` at depth ``y``; return their geometry ids."""
+    from pydrake.geometry import Sphere
+    from pydrake.math import RigidTransform
+
+    return [plant.RegisterCollisionGeometry(body, RigidTransform([x, y, z]), Sphere(r),
+                                            f"{name}_{k}", props)
+            for k, (x, z) in enumerate(corner_centres(profile, r))]
+
+
 def assembly_harmonic_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
     """Per-geometry coefficients (base and supports first) for the blocks of an assembly.
 
@@ -290,10 +315,8 @@ def assembly_harmonic_frictions(mu: float, mu_if: float, n_blocks: int) -> list[
     and the base and supports 2/μ − 1/μ_if, which is positive only for μ_if > μ/2
     (:meth:`DrakeEngine._check_supported` refuses the rest).
     """
-    if mu_if == mu:
+    if mu_if == mu:  # (also both zero, where the formula would divide by zero)
         return [mu] * (n_blocks + 1)
-    if mu == 0.0:  # a zero coefficient makes every pair it is in frictionless
-        return [0.0] + [mu_if] * n_blocks
     return [mu * mu_if / (2.0 * mu_if - mu)] + [mu_if] * n_blocks
 
 
@@ -386,21 +409,13 @@ class DrakeEngine(Engine):
         from pydrake.geometry import (
             Box,
             CollisionFilterDeclaration,
-            Convex,
             GeometrySet,
-            InMemoryMesh,
-            Sphere,
         )
         from pydrake.math import RigidTransform, RotationMatrix
         from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
         from pydrake.multibody.tree import PrismaticJoint, SpatialInertia, UnitInertia
         from pydrake.systems.analysis import Simulator
         from pydrake.systems.framework import DiagramBuilder
-
-        try:
-            from pydrake.common import MemoryFile
-        except ImportError:  # older layout
-            from pydrake.geometry import MemoryFile  # type: ignore[no-redef]
 
         assert isinstance(settings, DrakeSettings)
         s = settings
@@ -440,8 +455,7 @@ class DrakeEngine(Engine):
             # n_sl slices along y, each with one contact point per pair of shapes
             d = blk.depth / n_sl
             if blk.chamfer > 0 or not isinstance(blk, Block):
-                obj = MemoryFile(prism_obj(blk.profile(), d), ".obj", f"prism{i}.obj")
-                shape = Convex(InMemoryMesh(mesh_file=obj))
+                shape = _convex_prism(blk.profile(), d, f"prism{i}")
             else:
                 shape = Box(blk.width, d, blk.height)
             for j in range(n_sl):
@@ -449,10 +463,8 @@ class DrakeEngine(Engine):
                 shapes.append(plant.RegisterCollisionGeometry(
                     body, RigidTransform([0.0, y, 0.0]), shape, f"geom{i}_{j}", p_block))
                 if r is not None:
-                    for k_c, (x, z) in enumerate(corner_centres(blk.profile(), r)):
-                        corners.append(plant.RegisterCollisionGeometry(
-                            body, RigidTransform([x, y, z]), Sphere(r), f"corner{i}_{j}_{k_c}",
-                            p_block))
+                    corners += _add_corners(plant, body, blk.profile(), y, r, p_block,
+                                            f"corner{i}_{j}")
             bodies.append(body)
         # a ground large enough for the stack, its tilt and the base travel
         ext = scenario.stack.total_height + max(b.width for b in blocks)
@@ -489,11 +501,9 @@ class DrakeEngine(Engine):
             if r is not None:  # its corners on block faces, as the blocks' on its faces
                 d = depth / n_sl
                 for j in range(n_sl):
-                    y = (j + 0.5) * d - 0.5 * depth
-                    for k_c, (x, z) in enumerate(corner_centres(sup.array, r)):
-                        corners.append(plant.RegisterCollisionGeometry(
-                            anchor, RigidTransform([x, y, z]), Sphere(r),
-                            f"support{k_s}_corner{j}_{k_c}", p_ground))
+                    corners += _add_corners(plant, anchor, sup.array,
+                                            (j + 0.5) * d - 0.5 * depth, r, p_ground,
+                                            f"support{k_s}_corner{j}")
         plant.Finalize()
         if r is not None:
             # only corner–face pairs remain: a corner on the ground or on another block's
@@ -531,13 +541,8 @@ class DrakeEngine(Engine):
                      name: str) -> Any:
         """Register a fixed support's shape on the base ``body``, twice ``depth`` deep:
         a ``Box`` if it is an axis-aligned rectangle, else the ``Convex`` of its prism."""
-        from pydrake.geometry import Box, Convex, InMemoryMesh
+        from pydrake.geometry import Box
         from pydrake.math import RigidTransform
-
-        try:
-            from pydrake.common import MemoryFile
-        except ImportError:  # older layout
-            from pydrake.geometry import MemoryFile  # type: ignore[no-redef]
 
         v = sup.array
         lo, hi = v.min(axis=0), v.max(axis=0)
@@ -545,8 +550,7 @@ class DrakeEngine(Engine):
             shape = Box(float(hi[0] - lo[0]), 2.0 * depth, float(hi[1] - lo[1]))
             pose = RigidTransform([0.5 * float(lo[0] + hi[0]), 0.0, 0.5 * float(lo[1] + hi[1])])
         else:  # vertices in the base's frame (world coordinates at t = 0)
-            obj = MemoryFile(prism_obj(v, 2.0 * depth), ".obj", f"{name}.obj")
-            shape, pose = Convex(InMemoryMesh(mesh_file=obj)), RigidTransform()
+            shape, pose = _convex_prism(v, 2.0 * depth, name), RigidTransform()
         return plant.RegisterCollisionGeometry(body, pose, shape, name, props)
 
     # ------------------------------------------------------------------ drive
