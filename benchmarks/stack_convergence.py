@@ -12,7 +12,7 @@ Cases: the eight stack pulses (4 s) and the two well-posed stack sinusoids
 (5 Hz / 2 mm and 4 mm, 10 s; the other six are chaotic, see issue 15).
 Blender and LMGC90 live in environments of their own (``.ci/run``): run their rows
 there, e.g. ``.venv-blender/bin/python -m benchmarks.stack_convergence --engines
-blender --out FILE``, and copy the rows into RESULTS.md.
+blender``; the section keeps the rows of the engines a run leaves out.
 
 Per engine and setting it records, against the analytic two-block solution:
 the worst relative error of either block's peak |θ|/λ over the pulses whose
@@ -21,7 +21,8 @@ acceptance limits are 2 % and 5 %), the worst max |Δθ|/λ up to the reference'
 third impact (``max_error_early``), the largest interface slip and gap
 (:func:`rockbench.evaluation.interface_motion`) and the CPU time of all the
 runs. The Markdown section replaces the section of the same title in
-``benchmarks/RESULTS.md`` (the other sections are kept), or is appended.
+``benchmarks/RESULTS.md`` (the other sections, and the rows of engines not run, are
+kept), or is appended.
 Runs are in this process, one after the other (``nice`` it on a shared machine).
 """
 
@@ -29,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 import time
 from dataclasses import dataclass, field
@@ -57,6 +59,8 @@ PULSE_TOL, SINE_TOL = 0.02, 0.05
 CONVERGED = 0.005
 #: A step whose runs cost more CPU than this (s) is the last one refined.
 COST_CAP = 150.0
+#: The line that opens the per-case table.
+PER_CASE = "Per case: peak errors of the bottom / top block (%)."
 
 
 @dataclass(frozen=True)
@@ -344,7 +348,7 @@ def markdown(rows: list[Row], names: list[str], header: str = "") -> str:
                    f"{r.cpu:.0f} | {note} |")
     out += ["", NOTES.rstrip("\n")]
     short = [n.replace("stack-pulse-", "p ").replace("stack-sine-", "s ") for n in names]
-    out += ["", "Per case: peak errors of the bottom / top block (%).", "",
+    out += ["", PER_CASE, "",
             "| engine | setting | " + " | ".join(short) + " |",
             "|---|---|" + "---|" * len(names)]
     for r in rows:
@@ -368,14 +372,51 @@ def run(quick: bool = False, engines: list[str] | None = None) -> tuple[str, dic
     return text, {"rows": rows}
 
 
+def _rows(section: str) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
+    """Table rows of a section by engine: the summary table's, the per-case table's."""
+    summary, per_case = section.split(PER_CASE, 1)
+    out: tuple[dict[str, list[str]], dict[str, list[str]]] = ({}, {})
+    for part, rows in zip((summary, per_case), out, strict=True):
+        for line in part.splitlines():
+            m = re.match(r"\| (\w+) \| ", line)
+            if m and m.group(1) in LADDERS:
+                rows.setdefault(m.group(1), []).append(line)
+    return out
+
+
+def merge_rows(new: str, old: str) -> str:
+    """Section ``new`` with the rows of the engines it lacks taken from section ``old``
+    (an engine re-run alone, or in its own environment, keeps the others' rows)."""
+    fresh, previous = _rows(new), _rows(old)
+    kept = [e for e in previous[0] if e not in fresh[0]]
+    if not kept:
+        return new
+    order = [e for e in LADDERS if e in fresh[0] or e in kept]
+    out: list[str] = []
+    table, written = 0, set()  # 0: summary, 1: per case
+    for line in new.splitlines():
+        if line.startswith(PER_CASE):
+            table = 1
+        m = re.match(r"\| (\w+) \| ", line)
+        if not (m and m.group(1) in LADDERS):
+            out.append(line)
+        elif table not in written:  # the table's first engine row: all rows, in order
+            written.add(table)
+            out += [r for e in order for r in fresh[table].get(e, previous[table].get(e, []))]
+    out[2] += f" Rows of {', '.join(kept)} kept from the previous run."
+    return "\n".join(out) + "\n"
+
+
 def write_section(text: str, path: Path) -> None:
-    """Replace the section titled :data:`TITLE` in ``path`` (up to the next ``## ``) or append."""
+    """Replace the section titled :data:`TITLE` in ``path`` (up to the next ``## ``),
+    keeping the rows of the engines ``text`` lacks (:func:`merge_rows`), or append."""
     old = path.read_text(encoding="utf-8") if path.exists() else ""
     if TITLE in old:
         head, rest = old.split(TITLE, 1)
         nxt = rest.find("\n## ")
         tail = rest[nxt + 1:] if nxt >= 0 else ""
-        new = head + text + ("\n" + tail if tail else "")
+        section = TITLE + (rest[:nxt + 1] if nxt >= 0 else rest)
+        new = head + merge_rows(text, section) + ("\n" + tail if tail else "")
     else:
         new = old.rstrip("\n") + ("\n\n" if old else "") + text
     path.write_text(new, encoding="utf-8")
