@@ -66,11 +66,11 @@ class SpeedBound:
             Safety factor on the energy bound.
         v_base : float, optional
             Bound on the base speed (m/s) when the caller has it; from the
-            excitation's :meth:`~rockbench.scenarios.Excitation.motion_bounds` otherwise.
+            base motion's :meth:`~rockbench.scenarios.BaseMotion.motion_bounds` otherwise.
         """
-        height = scenario.stack.total_height
+        height = scenario.geometry.total_height
         if v_base is None:
-            v_base = scenario.excitation.motion_bounds(scenario.duration)[1]
+            v_base = scenario.motion.motion_bounds(scenario.duration)[1]
         v_max = factor * (math.sqrt(2.0 * scenario.g * height) + 2.0 * v_base) + SPEED_FLOOR
         k_min = min(math.sqrt(b.inertia[1] / b.m) for b in scenario.blocks)
         return cls(v_max=v_max, omega_max=v_max / k_min)

@@ -7,19 +7,19 @@ from typing import ClassVar
 import numpy as np
 import pytest
 
+from rockbench import checks
 from rockbench.analytic.housner import scalar_acceleration, single_block_reference
 from rockbench.errors import ScenarioError
 from rockbench.scenarios import (
     REPORT_GROUPS,
+    AxialExcitation,
     Block,
     CosinePulse,
-    Excitation,
     Free,
     Record,
     Scenario,
     SinePulse,
     Sinusoid,
-    checks,
     excitation_class,
     excitation_from_table,
     excitation_kinds,
@@ -261,7 +261,7 @@ def test_registry_refuses_a_taken_kind_and_an_unknown_group():
 
 
 @dataclass(frozen=True)
-class BangBang(Excitation):
+class BangBang(AxialExcitation):
     """A new excitation in one class: ü_g = +level for T/2, then −level for T/2.
 
     The base ends at rest, displaced by level·T²/4. Defined here only: nothing

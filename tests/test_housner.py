@@ -10,10 +10,14 @@ with the ODE integrated through every half-cycle (``free_closed_form=False``).
 from __future__ import annotations
 
 import math
+import re
 import time
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from rockbench.analytic.closed_forms import (
     amplitude_after_impacts,
@@ -24,7 +28,18 @@ from rockbench.analytic.closed_forms import (
 )
 from rockbench.analytic.housner import scalar_acceleration, single_block_reference, solve_single
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import Block, Contact, Free, Record, Scenario, SinePulse, Sinusoid, Stack
+from rockbench.scenarios import (
+    AxialExcitation,
+    Block,
+    Components,
+    Contact,
+    Free,
+    Record,
+    Scenario,
+    SinePulse,
+    Sinusoid,
+    stack,
+)
 from rockbench.trajectory import Status, Trajectory
 
 G = 9.81
@@ -351,10 +366,10 @@ def test_reference_eta_override_and_overturning():
 
 
 def test_unsupported_scenarios():
-    two = Scenario("two", Stack((B0, B0)))
+    two = Scenario("two", stack((B0, B0)))
     with pytest.raises(UnsupportedScenario):
         single_block_reference(two)
-    off = Scenario("off", Stack((B0,), offsets=(0.1,)))
+    off = Scenario("off", stack((B0,), offsets=(0.1,)))
     with pytest.raises(UnsupportedScenario):
         single_block_reference(off)
 
@@ -499,3 +514,139 @@ def test_squat_block_stops_at_its_first_impact() -> None:
     assert ref.impacts[0] == pytest.approx(t1, rel=1e-9)
     after = ref.t > t1 + 1e-9
     assert np.all(ref.theta[after, 0] == 0.0)
+
+
+# ---------------------------------------------------------------- vertical base motion
+
+
+@dataclass(frozen=True)
+class Steady(AxialExcitation):
+    """ü = a on [0, until], then 0 (test-only: no ``kind``, so never registered).
+
+    A Record cannot hold a constant acceleration: its baseline correction removes the
+    mean acceleration so that the base ends at rest.
+    """
+
+    a: float
+    until: float
+
+    def acceleration(self, t: Any) -> Any:
+        t = np.asarray(t, float)
+        return np.where((t >= 0) & (t <= self.until), self.a, 0.0)
+
+    def velocity(self, t: Any) -> Any:
+        return self.a * np.clip(np.asarray(t, float), 0.0, self.until)
+
+    def displacement(self, t: Any) -> Any:
+        t = np.asarray(t, float)
+        tc = np.clip(t, 0.0, self.until)
+        return 0.5 * self.a * tc * tc + self.a * self.until * np.maximum(t - self.until, 0.0)
+
+    @property
+    def end_time(self) -> float:
+        return self.until
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        return (self.until,)
+
+    @classmethod
+    def from_table(cls, table: Any, *, source: Any = None) -> Steady:
+        raise NotImplementedError
+
+    def to_table(self) -> dict[str, Any]:
+        raise NotImplementedError
+
+
+@pytest.mark.parametrize("z", [Free(), SinePulse(5.0, 0.0)], ids=["still", "zero-pulse"])
+def test_components_without_vertical_acceleration_are_the_horizontal_reference(z):
+    """ü_z ≡ 0 as a Components excitation: bit for bit the reference of the x motion alone,
+    whether z stands still or takes the vertical path with a zero pulse (the same timing)."""
+    x = SinePulse(5.0, 0.006)
+    alone = single_block_reference(Scenario("x", SINGLE2, excitation=x, duration=4.0))
+    both = single_block_reference(Scenario("x", SINGLE2, excitation=Components(x=x, z=z),
+                                           duration=4.0))
+    assert alone.status is both.status is Status.OK and alone.impacts.size > 3
+    for f in ("t", "theta", "x", "z", "impacts"):
+        np.testing.assert_array_equal(getattr(both, f), getattr(alone, f), err_msg=f)
+    assert both.extra == alone.extra and both.message == alone.message
+
+
+@pytest.mark.parametrize("a_z", [0.5 * G, -0.4 * G])
+def test_constant_vertical_acceleration_is_a_gravity_g_plus_a_z(a_z):
+    """Free rocking on a base accelerating steadily upward (a_z > 0) or downward (> −g) is
+    free rocking under gravity g + a_z: impact times scale by √(g / (g + a_z))."""
+    dur = 8.0
+    lift = Scenario("lift", B0, excitation=Components(z=Steady(a_z, 2 * dur)), initial_tilt=0.5,
+                    duration=dur)
+    heavy = Scenario("heavy", B0, initial_tilt=0.5, duration=dur, g=G + a_z)
+    a, b = single_block_reference(lift), single_block_reference(heavy)
+    assert a.status is b.status is Status.OK
+    assert a.impacts.size == b.impacts.size >= 5
+    np.testing.assert_allclose(a.impacts, b.impacts, rtol=0, atol=1e-8)
+    scale = math.sqrt(G / (G + a_z))
+    # the closed form of free rocking with p² ∝ g + a_z, and the g-only run's times, scaled
+    rock = B0.rocking(G)
+    times = free_impact_times(rock.p / scale, rock.lam, 0.5 * rock.lam, rock.eta, a.impacts.size)
+    np.testing.assert_allclose(a.impacts, times, rtol=1e-9)
+    still = single_block_reference(Scenario("still", B0, initial_tilt=0.5,
+                                            duration=dur / scale + 0.1))
+    np.testing.assert_allclose(a.impacts, scale * still.impacts[:a.impacts.size], rtol=0,
+                               atol=1e-8)
+    # the same rotation, and the centroid rides on the base: z = z_g+a + ½ a_z t²
+    np.testing.assert_allclose(a.theta, b.theta, rtol=0, atol=1e-8 * rock.lam)
+    np.testing.assert_allclose(a.z[:, 0] - 0.5 * a_z * a.t**2, b.z[:, 0], rtol=0, atol=1e-9)
+
+
+def test_base_falling_faster_than_gravity_stops_the_reference():
+    """Where ü_z < −g the block leaves the ground: the reference stops there, unsupported."""
+    z = SinePulse(2.0, 1.5 * G / (4 * math.pi) ** 2)  # peak 1.5 g, below −g in its 2nd half
+    w = z.omega
+    t_flight = (math.pi + math.asin(G / z.peak_acceleration())) / w  # g + ü_z = 0
+    sc = Scenario("fall", SINGLE2, excitation=Components(x=SinePulse(5.0, 0.006), z=z),
+                  duration=2.0)
+    tr = single_block_reference(sc)
+    assert tr.status is Status.UNSUPPORTED and "leaves the ground" in tr.message
+    said = float(re.search(r"at t = ([0-9.]+) s", tr.message).group(1))
+    assert said == pytest.approx(t_flight, abs=5e-7)
+    assert tr.t[-1] <= t_flight < tr.t[-1] + 1 / sc.output_rate
+    assert np.all(np.isfinite(tr.theta))
+    # the solver's own time, against a root of g + ü_z on the inputs
+    rock = SINGLE2.rocking(G)
+    sol = solve_single(rock, g=G, accel=Free().acceleration, end_time=z.end_time,
+                       breakpoints=z.breakpoints, t_out=sc.output_times(),
+                       vertical=(z.acceleration, lambda t: float(z.acceleration(t))))
+    assert sol.status == "flight" and sol.t[-1] <= t_flight
+    root = brentq(lambda t: G + float(z.acceleration(t)), 0.5 / z.frequency, 0.75 / z.frequency,
+                  xtol=1e-14)
+    assert t_flight == pytest.approx(root, abs=1e-12)
+    # a base falling at 1.2 g from the start: the block is never on the ground
+    tr = single_block_reference(sc.replace(excitation=Components(z=Steady(-1.2 * G, 5.0))))
+    assert tr.status is Status.UNSUPPORTED and "at t = 0.000000 s" in tr.message
+    assert tr.t.tolist() == [0.0]
+
+
+@pytest.mark.parametrize("linear", [False, True], ids=["exact", "linear"])
+def test_uplift_under_vertical_motion_at_g_plus_uz_tan_lambda(linear):
+    """The block lifts off when |ü_x| = (g + ü_z) tan λ ((g + ü_z) λ linearised)."""
+    rock = SINGLE2.rocking(G)
+    x, z = SinePulse(5.0, 0.006), SinePulse(3.0, 0.02)  # ü_z ≈ 1.4 m/s² at the uplift
+    sc = Scenario("up", SINGLE2, excitation=Components(x=x, z=z), duration=1.0)
+    tr = single_block_reference(sc, linear=linear)
+    assert tr.status is Status.OK
+    slope = rock.lam if linear else math.tan(rock.lam)
+
+    def excess(t: float) -> float:
+        return abs(float(x.acceleration(t))) - (G + float(z.acceleration(t))) * slope
+
+    tt = np.linspace(0.0, 0.05, 50001)
+    first = int(np.argmax([excess(float(t)) > 0 for t in tt]))
+    assert first > 0
+    root = brentq(excess, float(tt[first - 1]), float(tt[first]), xtol=1e-15)
+    assert tr.extra["uplift_times"][0] == pytest.approx(root, abs=1e-12)
+    # later than on a base that does not move vertically (the upward ü_z adds weight)
+    flat = single_block_reference(sc.replace(excitation=x), linear=linear)
+    assert tr.extra["uplift_times"][0] - flat.extra["uplift_times"][0] > 1e-3
+    # a positive ü_x tips the block to θ < 0 first
+    assert np.all(tr.theta[tr.t <= tr.impacts[0], 0] <= 0)
+    assert np.min(tr.theta) < -0.01 * rock.lam

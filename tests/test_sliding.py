@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 import numpy as np
 import pytest
 
-from rockbench.analytic import reference, slides, sliding_reference, slip_of
+from rockbench.analytic import critical_angle, reference, slides, sliding_reference, slip_of
 from rockbench.analytic.sliding import (
     Regime,
     onset_regime,
@@ -25,17 +25,19 @@ from rockbench.analytic.sliding import (
 from rockbench.analytic.twoblock_model import BlockParams
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import (
+    AxialExcitation,
     Block,
     Contact,
     CosinePulse,
     Excitation,
+    Geometry,
     Scenario,
     SinePulse,
     Sinusoid,
-    Stack,
     catalog,
     get_scenario,
     get_suite,
+    stack,
 )
 from rockbench.trajectory import Status
 
@@ -44,7 +46,7 @@ SINGLE2 = Block(width=0.17, depth=0.502, height=1.0, density=2670.0)
 
 
 @dataclass(frozen=True)
-class Step(Excitation):
+class Step(AxialExcitation):
     """ü_g = a on [0, T], then 0 (test-only: no ``kind``, so never registered)."""
 
     a: float
@@ -80,8 +82,8 @@ class Step(Excitation):
 
 
 def slider_scenario(exc: Excitation, mu: float, duration: float = 1.5,
-                    stack: Stack | None = None) -> Scenario:
-    return Scenario("slide", stack or Stack((SINGLE2,)), contact=Contact(friction=mu),
+                    geometry: Geometry | None = None) -> Scenario:
+    return Scenario("slide", geometry or stack((SINGLE2,)), contact=Contact(friction=mu),
                     excitation=exc, duration=duration, output_rate=1000.0)
 
 
@@ -241,7 +243,7 @@ def test_sliding_trajectory_moves_with_the_base_plus_the_slip():
     tr = reference(sc)
     assert tr.engine_version.startswith("sliding-") and tr.status is Status.OK
     sol = solve_sliding(sc.excitation, 0.10, g=G, t_out=sc.output_times())
-    x0, z0 = sc.stack.centroids[0]
+    x0, z0 = sc.geometry.centroids[0]
     np.testing.assert_allclose(tr.x[:, 0], x0 + sc.excitation.displacement(tr.t) + sol.slip,
                                atol=1e-15)
     np.testing.assert_array_equal(tr.z[:, 0], z0)
@@ -252,7 +254,7 @@ def test_sliding_trajectory_moves_with_the_base_plus_the_slip():
 
 def test_a_stack_below_every_uplift_ratio_slides_as_one_body():
     sc = get_scenario("slide-stack-pulse-5.0hz-4mm-mu0.10")
-    assert sc.contact.friction < math.tan(sc.critical_angle)
+    assert sc.contact.friction < math.tan(critical_angle(sc.geometry))
     tr = reference(sc)
     assert tr.engine_version.startswith("sliding-") and tr.n_blocks == 2
     s1, s2 = slip_of(tr, sc, 0), slip_of(tr, sc, 1)

@@ -55,7 +55,7 @@ def test_tilt_table_reads_back_its_table_and_refuses_bad_fields():
 
 # ---------------------------------------------------------------- engines against the LP
 CASES = {
-    "single block b/h = 0.5": Scenario(name="b2", stack=Block(0.5, 0.2, 1.0, mass=1.0)),
+    "single block b/h = 0.5": Scenario(name="b2", geometry=Block(0.5, 0.2, 1.0, mass=1.0)),
     "parapet": get_scenario("parapet-offset0.25"),
     "5-drum column": get_scenario("column-5drums"),
 }

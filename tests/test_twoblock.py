@@ -27,7 +27,7 @@ from rockbench.bounds import check_trajectory
 from rockbench.engines import engine_class
 from rockbench.errors import UnsupportedScenario
 from rockbench.runner import Job, run_job
-from rockbench.scenarios import Block, Free, Record, Scenario, SinePulse, Stack, get_scenario
+from rockbench.scenarios import Block, Free, Record, Scenario, SinePulse, get_scenario, stack
 from rockbench.trajectory import Status, Trajectory
 
 G = 9.81
@@ -595,10 +595,10 @@ def test_reference_monolithic_limit(kind):
     lower = Block(width=0.30, depth=0.3, height=1.2, density=2500.0, chamfer=0.01)
     upper = Block(width=0.50, depth=0.3, height=0.15, density=2500.0, chamfer=0.01)
     if kind == "free":
-        sc = Scenario("mono-free", Stack((lower, upper)), excitation=Free(), initial_tilt=0.5,
+        sc = Scenario("mono-free", stack((lower, upper)), excitation=Free(), initial_tilt=0.5,
                       duration=2.5, output_rate=200.0)
     else:
-        sc = Scenario("mono-pulse", Stack((lower, upper)), excitation=SinePulse(2.0, 0.02),
+        sc = Scenario("mono-pulse", stack((lower, upper)), excitation=SinePulse(2.0, 0.02),
                       duration=2.5, output_rate=200.0)
     tr = two_block_reference(sc)
     assert tr.status == Status.OK and tr.engine == "analytic"
@@ -642,17 +642,17 @@ def test_reference_monolithic_limit(kind):
 def test_reference_rejects_unsupported():
     blk = Block(width=0.2, depth=0.2, height=0.6, density=2000.0)
     with pytest.raises(UnsupportedScenario):
-        two_block_reference(Scenario("one", Stack((blk,))))
+        two_block_reference(Scenario("one", stack((blk,))))
     with pytest.raises(UnsupportedScenario):
-        two_block_reference(Scenario("three", Stack((blk, blk, blk))))
+        two_block_reference(Scenario("three", stack((blk, blk, blk))))
     with pytest.raises(UnsupportedScenario):
-        two_block_reference(Scenario("off", Stack((blk, blk), offsets=(0.0, 0.01))))
+        two_block_reference(Scenario("off", stack((blk, blk), offsets=(0.0, 0.01))))
 
 
 def test_reference_paper_case_completes():
     bottom = Block(width=0.20, depth=0.40, height=0.60, density=2670, chamfer=0.005)
     top = Block(width=0.15, depth=0.55, height=0.60, density=2670, chamfer=0.005)
-    sc = Scenario("stack-pulse-5.0hz-4mm", Stack((bottom, top)),
+    sc = Scenario("stack-pulse-5.0hz-4mm", stack((bottom, top)),
                   excitation=SinePulse(5.0, 0.004), duration=4.0, output_rate=1000.0)
     tr = two_block_reference(sc)
     assert tr.status.completed and tr.theta.shape == (4001, 2)
@@ -664,7 +664,7 @@ def test_reference_paper_case_completes():
 def test_reference_overturn_and_record_input():
     lower = Block(width=0.30, depth=0.3, height=1.2, density=2500.0, chamfer=0.01)
     upper = Block(width=0.50, depth=0.3, height=0.15, density=2500.0, chamfer=0.01)
-    sc = Scenario("mono-over", Stack((lower, upper)), excitation=SinePulse(2.0, 0.03),
+    sc = Scenario("mono-over", stack((lower, upper)), excitation=SinePulse(2.0, 0.03),
                   duration=2.5, output_rate=200.0)
     tr = two_block_reference(sc)
     assert tr.status == Status.OVERTURNED
@@ -719,7 +719,7 @@ def test_kick_of_lower_block_and_legacy_rule():
 #: threshold g bc/h2 is 10× the stack's), 1 Hz sine pulse of 10 m/s²: the whole stack
 #: goes over during the first excursion (mode 1 of the monolithic block).
 WHOLE = Scenario("whole-stack-over",
-                 Stack((Block(0.30, 0.3, 1.2, density=2500.0),
+                 stack((Block(0.30, 0.3, 1.2, density=2500.0),
                         Block(0.50, 0.3, 0.15, density=2500.0))),
                  excitation=SinePulse.from_acceleration(10.0, 2 * math.pi), duration=1.5)
 #: The paper's stack under the 5 Hz pulse at 20 mm (issue 15): the top block alone goes.
@@ -729,7 +729,7 @@ TOP = get_scenario("stack-pulse-5.0hz-4mm").replace(excitation=SinePulse(5.0, 0.
 
 def test_whole_stack_overturn_is_reported_with_time_and_block():
     tr = two_block_reference(WHOLE)
-    mono = WHOLE.stack.monolithic(G)
+    mono = WHOLE.geometry.column.monolithic(G)
     housner = pulse_outcome(mono, WHOLE.excitation, g=G)
     assert housner.overturned and housner.impacts == 0  # mode 1 of the monolithic stack
     assert tr.status is Status.OVERTURNED

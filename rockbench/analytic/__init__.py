@@ -14,24 +14,7 @@ from rockbench.analytic.closed_forms import (
     quarter_period,
 )
 from rockbench.analytic.housner import SingleBlockSolution, single_block_reference, solve_single
-from rockbench.analytic.limit_analysis import (
-    BlockMotion,
-    InterfaceForce,
-    InterfaceMotion,
-    LimitResult,
-    limit_analysis,
-    minimum_stable,
-    stands,
-)
-from rockbench.analytic.limit_geometry import (
-    Assembly,
-    Interface,
-    PlanarBlock,
-    Support,
-    assembly_from_stack,
-    block_stack,
-    semicircular_arch,
-)
+from rockbench.analytic.normalisation import critical_angle, uplift_ratio
 from rockbench.analytic.overturning import (
     minimum_overturning_acceleration,
     pulse_outcome,
@@ -48,6 +31,15 @@ from rockbench.analytic.sliding import (
     sliding_reference,
     slip_of,
     solve_sliding,
+)
+from rockbench.analytic.static_collapse import (
+    BlockMotion,
+    InterfaceForce,
+    InterfaceMotion,
+    LimitResult,
+    limit_analysis,
+    minimum_stable,
+    stands,
 )
 from rockbench.analytic.twoblock import (
     BlockParams,
@@ -68,17 +60,33 @@ __all__ = [
     "slip_of", "SlidingSolution", "SlipPhase", "Regime", "RegimeThresholds",
     "regime_thresholds", "onset_regime",
     "limit_analysis", "stands", "minimum_stable", "LimitResult", "BlockMotion",
-    "InterfaceMotion", "InterfaceForce", "Assembly", "PlanarBlock", "Support", "Interface",
-    "block_stack", "semicircular_arch", "assembly_from_stack",
+    "InterfaceMotion", "InterfaceForce", "critical_angle", "uplift_ratio", "coverage",
 ]
 
 
+def coverage(scenario: Scenario) -> str:
+    """Why no analytic model covers ``scenario`` ('' when one does).
+
+    The models are planar: one block (Housner, with the vertical base motion
+    in g + ü_z) or two stacked centred blocks (the two-block model), and the
+    Coulomb slider; other geometries have their static limit-analysis
+    reference only.
+    """
+    col = scenario.geometry.column
+    if col is None or len(col) > 2 or not col.centred:
+        return "no analytic model: one block or two centred stacked blocks only"
+    axes = scenario.motion.axes
+    if "y" in axes:
+        return "no analytic model: the planar models take no base motion along y"
+    if "z" in axes and (len(col) > 1 or slides(scenario)):
+        return ("no analytic model: the vertical base motion enters Housner's single "
+                "rocking block only")
+    return ""
+
+
 def has_reference(scenario: Scenario) -> bool:
-    """True if an analytic model exists for this scenario (1 or 2 centred blocks; a block
-    assembly has its static limit-analysis reference, no dynamic one)."""
-    if scenario.is_assembly:
-        return False
-    return scenario.n_blocks <= 2 and not any(scenario.stack.offsets)
+    """True if an analytic model covers this scenario (:func:`coverage`)."""
+    return not coverage(scenario)
 
 
 def reference(scenario: Scenario, *, linear: bool = False) -> Trajectory:
@@ -101,12 +109,11 @@ def reference(scenario: Scenario, *, linear: bool = False) -> Trajectory:
     Raises
     ------
     UnsupportedScenario
-        More than two blocks, or off-centre blocks.
+        No model covers it (:func:`coverage` says why).
     """
-    if not has_reference(scenario):
-        raise UnsupportedScenario(
-            "analytic references exist for one block or two centred stacked blocks only"
-        )
+    why = coverage(scenario)
+    if why:
+        raise UnsupportedScenario(why)
     if slides(scenario):
         return sliding_reference(scenario)
     if scenario.n_blocks == 1:

@@ -2,13 +2,15 @@
 
 Model (``two-block-model.md`` §2.2 and §4, rockbench's sign convention)::
 
-    θ'' = −p² [sin(s λ − θ) + (ü_g/g) cos(s λ − θ)],   s = sgn θ
+    θ'' = −p² [(1 + ü_z/g) sin(s λ − θ) + (ü_g/g) cos(s λ − θ)],   s = sgn θ
 
 θ > 0 when the top moves toward +x (pivot on the +x bottom edge); a positive
-base acceleration tips a resting block to θ < 0.
+base acceleration tips a resting block to θ < 0. ü_g is the horizontal base
+acceleration along x and ü_z the vertical one (0 unless the scenario's base
+moves vertically): the block's weight is then m (g + ü_z).
 
-* **Uplift** from rest when |ü_g| > g tan λ (linearised model: g λ), on the side
-  s = −sgn ü_g. The crossing time is located by a sampled scan of ü_g (step
+* **Uplift** from rest when |ü_g| > (g + ü_z) tan λ (linearised model: (g + ü_z) λ),
+  on the side s = −sgn ü_g. The crossing time is located by a sampled scan of ü_g (step
   ``SCAN_STEP``, local maxima refined by a bounded minimisation so that short
   exceedances between samples are not missed) followed by Brent's method; the
   returned time is on the exceeding side of the threshold.
@@ -22,6 +24,9 @@ base acceleration tips a resting block to θ < 0.
   of the free Zeno sequence lasts about 2 (w/(pλ)) η/((1−η) p), i.e. 19 ms for
   the 1 m × 5 m block B0.
 * **Overturning** when |θ| reaches π/2 (terminal).
+* **Flight.** Where g + ü_z < 0 the base falls faster than the block and the
+  block leaves the ground, which the model does not follow: the solution stops
+  there (status ``"flight"``).
 
 Forced phases are integrated with DOP853 (rtol 1e-10, atol 1e-12, dense output,
 terminal events), restarted at every excitation breakpoint. The default
@@ -62,10 +67,11 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, minimize_scalar
 from scipy.special import ellipj, ellipkinc
 
-import rockbench
+from rockbench import provenance
 from rockbench.analytic._integrate import integrate_phase
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import Excitation, RockingProperties, Scenario
+from rockbench.geometry import RockingProperties
+from rockbench.scenarios import Motion, Scenario
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = [
@@ -165,7 +171,9 @@ class _Solver:
     def __init__(self, rock: RockingProperties, g: float, accel: Callable[[Any], Any],
                  accel_scalar: Callable[[float], float] | None, eta: float, linear: bool,
                  rtol: float, atol: float, rest_factor: float,
-                 integrator: str = "builtin") -> None:
+                 integrator: str = "builtin",
+                 vertical: tuple[Callable[[Any], Any], Callable[[float], float]] | None = None
+                 ) -> None:
         if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
         self.integrator = integrator
@@ -182,12 +190,38 @@ class _Solver:
         self.w_rest = rest_factor * self.p * self.lam
         self.sin_half = math.sin(0.5 * self.lam)
         self.last_step: float | None = None
+        # the vertical base acceleration (vectorised, scalar), None when the base moves
+        # horizontally only (then every formula below is the horizontal one as it was)
+        self.vertical = vertical
 
     # ------------------------------------------------------------------ forcing
     def a(self, t: float) -> float:
         return float(self.acc1(t))
 
+    def _shortfall(self, t: float) -> float:
+        """What minimize_scalar minimises near a peak: −|ü_g| (threshold − |ü_g| with a
+        vertical motion, whose threshold moves)."""
+        if self.vertical is None:
+            return -abs(self.a(t))
+        return self.threshold(t) - abs(self.a(t))
+
+    def _exceeds(self, res: Any) -> bool:
+        """The minimum found by :meth:`_shortfall` lies beyond the threshold."""
+        if self.vertical is None:
+            return -res.fun > self.thr
+        return res.fun < 0.0
+
+    def threshold(self, t: Any) -> Any:
+        """Uplift threshold |ü_g| must exceed at ``t``: (g + ü_z) tan λ (scalar or array)."""
+        if self.vertical is None:
+            return self.thr
+        az = self.vertical[1](t) if isinstance(t, float) else np.asarray(self.vertical[0](t))
+        return self.thr * (1.0 + az / self.g)
+
     def rhs(self, s: float, forced: bool) -> Callable[[float, np.ndarray], list[float]]:
+        if forced and self.vertical is not None:
+            alpha = self.alpha(s, forced)
+            return lambda t, y: [y[1], alpha(t, y[0])]
         p2, lam, g, acc = self.p2, self.lam, self.g, self.acc1
         sl = s * lam
         if self.linear:
@@ -206,6 +240,15 @@ class _Solver:
         """θ'' as a function of (t, θ) on side ``s`` (the scalar form of :meth:`rhs`)."""
         p2, lam, g, acc = self.p2, self.lam, self.g, self.acc1
         sl = s * lam
+        if forced and self.vertical is not None:
+            az = self.vertical[1]
+            if self.linear:
+                return lambda t, th: -p2 * ((1.0 + az(t) / g) * (sl - th) + float(acc(t)) / g)
+
+            def fz(t: float, th: float) -> float:
+                ph = sl - th
+                return -p2 * ((1.0 + az(t) / g) * math.sin(ph) + float(acc(t)) / g * math.cos(ph))
+            return fz
         if self.linear:
             if forced:
                 return lambda t, th: -p2 * (sl - th + float(acc(t)) / g)
@@ -222,7 +265,7 @@ class _Solver:
     def _crossing(self, lo: float, hi: float, sign: float) -> float:
         """Time in (lo, hi] where sign·ü_g first exceeds the threshold, on the exceeding side."""
         def f(t: float) -> float:
-            return sign * self.a(t) - self.thr
+            return sign * self.a(t) - self.threshold(t)
         r = brentq(f, lo, hi, xtol=1e-14, rtol=1e-15)
         step = 2e-14 * max(1.0, abs(r))
         while f(r) <= 0.0 and r < hi:
@@ -232,7 +275,7 @@ class _Solver:
 
     def next_uplift(self, ta: float, tb: float) -> float | None:
         """First time in [ta, tb] when |ü_g| exceeds the uplift threshold, or None."""
-        if abs(self.a(ta)) > self.thr:
+        if abs(self.a(ta)) > self.threshold(ta):
             return ta
         dt = SCAN_STEP
         n_tot = int(math.ceil((tb - ta) / dt))
@@ -241,17 +284,23 @@ class _Solver:
             j1 = min(n_tot, j0 + chunk)
             tt = np.minimum(ta + dt * np.arange(max(j0 - 1, 0), j1 + 1), tb)
             av = np.abs(np.asarray(self.accel(tt), dtype=float) * np.ones_like(tt))
-            over = np.flatnonzero(av > self.thr)
+            thr = self.threshold(tt)
+            over = np.flatnonzero(av > thr)
             first = over[0] if over.size else av.size
             # local maxima below the threshold but close to it: refine between samples
             inner = np.arange(1, min(first, av.size - 1))
             if inner.size:
-                pk = inner[(av[inner] > av[inner - 1]) & (av[inner] >= av[inner + 1])
-                           & (av[inner] > 0.98 * self.thr)]
+                if self.vertical is None:
+                    pk = inner[(av[inner] > av[inner - 1]) & (av[inner] >= av[inner + 1])
+                               & (av[inner] > 0.98 * thr)]
+                else:  # maxima of the excess over a threshold that moves
+                    ex = av - thr
+                    pk = inner[(ex[inner] > ex[inner - 1]) & (ex[inner] >= ex[inner + 1])
+                               & (ex[inner] > -0.02 * thr[inner])]
                 for i in pk:
-                    res = minimize_scalar(lambda t: -abs(self.a(t)), bounds=(tt[i - 1], tt[i + 1]),
+                    res = minimize_scalar(self._shortfall, bounds=(tt[i - 1], tt[i + 1]),
                                           method="bounded", options={"xatol": 1e-12})
-                    if -res.fun > self.thr:
+                    if self._exceeds(res):
                         tp = float(res.x)
                         return self._crossing(float(tt[i - 1]), tp, math.copysign(1, self.a(tp)))
             if over.size:
@@ -449,7 +498,22 @@ class _Solver:
         return outcome, t_stop, omega
 
 
-def scalar_acceleration(exc: Excitation) -> Callable[[float], float] | None:
+def _flight_time(az: Callable[[Any], Any], az1: Callable[[float], float], g: float,
+                 t_end: float) -> float | None:
+    """First time in [0, t_end] when g + ü_z < 0 (the block leaves the ground), or None."""
+    if not t_end > 0:
+        return None
+    tt = np.linspace(0.0, t_end, max(2, int(math.ceil(t_end / SCAN_STEP)) + 1))
+    low = np.flatnonzero(g + np.asarray(az(tt), float) < 0.0)
+    if low.size == 0:
+        return None
+    i = int(low[0])
+    if i == 0:
+        return 0.0
+    return float(brentq(lambda t: g + az1(t), float(tt[i - 1]), float(tt[i]), xtol=1e-14))
+
+
+def scalar_acceleration(exc: Motion) -> Callable[[float], float] | None:
     """A fast scalar ü_g(t) for the ODE right-hand side, or None to use ``exc.acceleration``.
 
     Evaluating an excitation's vectorised method on one float costs tens of µs,
@@ -488,6 +552,7 @@ def solve_single(
     rest_factor: float = REST_FACTOR,
     free_closed_form: bool = True,
     integrator: str = "builtin",
+    vertical: tuple[Callable[[Any], Any], Callable[[float], float]] | None = None,
 ) -> SingleBlockSolution:
     """Solve Housner's single-block rocking problem.
 
@@ -526,10 +591,15 @@ def solve_single(
         DOP853 implementation of the ODE phases: the built-in scalar one
         (default, same algorithm, several times faster) or
         ``scipy.integrate.solve_ivp``.
+    vertical : (callable, callable), optional
+        The vertical base acceleration ü_z(t) in m/s² (positive up), vectorised
+        and for one float; its breakpoints must be in ``breakpoints`` and it
+        must vanish after ``end_time``. None: the base moves horizontally only.
 
     Returns
     -------
     SingleBlockSolution
+        Status ``"flight"`` when g + ü_z turns negative: the solution stops there.
     """
     t_out = np.asarray(t_out, dtype=float).reshape(-1)
     if t_out.size == 0:
@@ -545,8 +615,13 @@ def solve_single(
     eta = float(max(rock.eta, 0.0) if eta is None else eta)
     if not 0.0 <= eta <= 1.0:
         raise ValueError(f"eta must be in [0, 1], got {eta!r}")
-    sv = _Solver(rock, g, accel, accel_scalar, eta, linear, rtol, atol, rest_factor, integrator)
+    sv = _Solver(rock, g, accel, accel_scalar, eta, linear, rtol, atol, rest_factor, integrator,
+                 vertical)
     t_fin = float(t_out[-1])
+    t_flight = (None if vertical is None else
+                _flight_time(vertical[0], vertical[1], float(g), min(float(end_time), t_fin)))
+    if t_flight is not None:
+        t_fin = t_flight
     end_time = float(end_time)
     bps = sorted({float(b) for b in breakpoints if 0.0 < b < t_fin}
                  | ({end_time} if 0.0 < end_time < t_fin else set()))
@@ -629,6 +704,11 @@ def solve_single(
         n = int(np.searchsorted(t_out, run.overturn, side="right"))
         status = "overturned"
         message = f"overturned at t = {run.overturn:.6f} s"
+    elif t_flight is not None and not run.incomplete:
+        n = max(1, int(np.searchsorted(t_out, t_flight, side="right")))
+        status = "flight"
+        message = (f"the base falls faster than gravity at t = {t_flight:.6f} s (g + ü_z < 0): "
+                   f"the block leaves the ground, which the model does not follow")
     elif run.incomplete:
         n = int(np.searchsorted(t_out, run.t_reached, side="right"))
         status = "incomplete"
@@ -677,24 +757,30 @@ def single_block_reference(
     UnsupportedScenario
         More than one block, or a non-zero offset.
     """
-    if scenario.n_blocks != 1:
+    col = scenario.geometry.column
+    if col is None or len(col) != 1 or not col.centred:
         raise UnsupportedScenario(
-            f"the Housner single-block reference needs 1 block, scenario {scenario.name!r} "
-            f"has {scenario.n_blocks}"
-        )
-    if any(scenario.stack.offsets):
-        raise UnsupportedScenario("the Housner single-block reference needs a centred block")
-    block = scenario.blocks[0]
+            f"the Housner single-block reference needs one centred block, scenario "
+            f"{scenario.name!r} has another geometry")
+    motion = scenario.motion
+    if "y" in motion.axes:
+        raise UnsupportedScenario("the Housner reference is planar: no base motion along y")
+    block = col.blocks[0]
     rock = block.rocking(scenario.g)
     eta = scenario.contact.eta
-    exc = scenario.excitation
+    exc, up = motion.x, motion.z
+    vertical = None
+    if not up.is_free:
+        fast = scalar_acceleration(up)
+        vertical = (up.acceleration, fast if fast is not None
+                    else (lambda t: float(up.acceleration(t))))
     t_out = scenario.output_times()
     start = time.perf_counter()
     sol = solve_single(
         rock, g=scenario.g, accel=exc.acceleration, accel_scalar=scalar_acceleration(exc),
-        breakpoints=exc.breakpoints,
-        end_time=exc.end_time, theta0=scenario.theta0, t_out=t_out, eta=eta,
-        linear=linear, rtol=rtol, atol=atol, integrator=integrator,
+        breakpoints=motion.breakpoints,
+        end_time=motion.end_time, theta0=scenario.theta0, t_out=t_out, eta=eta,
+        linear=linear, rtol=rtol, atol=atol, integrator=integrator, vertical=vertical,
     )
     th = sol.theta
     bp, h = block.pivot_half_width, block.h
@@ -703,12 +789,15 @@ def single_block_reference(
     # pivot (s·bp + u_g, 0); upright pivot→centroid vector (−s·bp, h) rotated by θ about +y
     x = np.asarray(exc.displacement(sol.t), float) + sgn * bp + (-sgn * bp * ct + h * st)
     z = sgn * bp * st + h * ct
+    if vertical is not None:
+        z = z + np.asarray(up.displacement(sol.t), float)
     wall = time.perf_counter() - start
-    status = {"ok": Status.OK, "overturned": Status.OVERTURNED}.get(sol.status, Status.CRASHED)
+    status = {"ok": Status.OK, "overturned": Status.OVERTURNED,
+              "flight": Status.UNSUPPORTED}.get(sol.status, Status.CRASHED)
     return Trajectory(
         t=sol.t, theta=th[:, None], x=x[:, None], z=z[:, None], wobble=np.zeros((th.size, 1)),
         status=status, message=sol.message, wall_time=wall, engine="analytic",
-        engine_version=f"housner-{rockbench.__version__}",
+        engine_version=f"housner-{provenance.code_version('reference')}",
         settings={"rtol": rtol, "atol": atol, "linear": linear,
                   "eta": float(rock.eta if eta is None else eta)},
         scenario=scenario.name, impacts=sol.impacts,

@@ -32,7 +32,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rockbench.analytic.housner import scalar_acceleration, solve_single
-from rockbench.scenarios import CosinePulse, Excitation, RockingProperties, SinePulse
+from rockbench.geometry import RockingProperties
+from rockbench.scenarios import CosinePulse, Motion, SinePulse
 
 __all__ = [
     "PULSES", "NO_UPLIFT", "SAFE", "Outcome", "Boundary", "ColumnResult",
@@ -201,7 +202,7 @@ def free_motion_fate(theta: float, omega: float, *, lam: float, p: float, eta: f
     return (True, 1) if e_after > 0.0 else (False, 0)
 
 
-def pulse_outcome(rock: RockingProperties, excitation: Excitation, *, g: float,
+def pulse_outcome(rock: RockingProperties, excitation: Motion, *, g: float,
                   eta: float | None = None, linear: bool = False, rtol: float = 1e-9,
                   atol: float = 1e-12) -> Outcome:
     """Fate of a block at rest under a base motion that ends (a pulse or any finite motion).
@@ -210,7 +211,7 @@ def pulse_outcome(rock: RockingProperties, excitation: Excitation, *, g: float,
     ----------
     rock : RockingProperties
         Block constants (λ, p, η).
-    excitation : Excitation
+    excitation : Motion
         Base motion with a finite ``end_time``.
     g : float
         Gravity (m/s²).

@@ -71,11 +71,11 @@ from enum import Enum
 import numpy as np
 from scipy.optimize import brentq
 
-import rockbench
+from rockbench import provenance
+from rockbench.analytic.normalisation import critical_angle
 from rockbench.analytic.twoblock_model import BlockParams
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import Excitation, Scenario
-from rockbench.scenarios.model import Stack
+from rockbench.scenarios import Motion, Scenario
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = [
@@ -259,7 +259,7 @@ def _root(f: Callable[[float], float], ta: float, tb: float) -> float:
 class _Slider:
     """The event loop of one sliding run."""
 
-    def __init__(self, exc: Excitation, mu: float, g: float, t_end: float, step: float) -> None:
+    def __init__(self, exc: Motion, mu: float, g: float, t_end: float, step: float) -> None:
         self.acc, self.vel, self.disp = exc.acceleration, exc.velocity, exc.displacement
         self.mug = mu * g
         self.t_end = t_end
@@ -360,14 +360,14 @@ class _Slider:
 
 
 def solve_sliding(
-    excitation: Excitation, mu: float, *, g: float, t_out: np.ndarray | list[float],
+    excitation: Motion, mu: float, *, g: float, t_out: np.ndarray | list[float],
     scan_step: float = SCAN_STEP, max_phases: int = 100000,
 ) -> SlidingSolution:
     """Slip of a rigid block on a moving base with Coulomb friction, from rest.
 
     Parameters
     ----------
-    excitation : Excitation
+    excitation : Motion
         Base motion (its exact velocity and displacement enter the closed forms).
     mu : float
         Friction coefficient (≥ 0; static = kinetic).
@@ -415,13 +415,13 @@ def interface_slips(scenario: Scenario) -> bool:
     base acceleration that exceeds μᵢ g at some time.
     """
     c = scenario.contact
-    if (scenario.n_blocks != 2 or c.interface_friction is None
-            or not isinstance(scenario.stack, Stack)):
+    col = scenario.geometry.column
+    if col is None or len(col) != 2 or c.interface_friction is None:
         return False
-    if scenario.initial_tilt != 0.0 or any(scenario.stack.offsets):
+    if scenario.initial_tilt != 0.0 or not col.centred:
         return False
     mu_i = c.interface_friction
-    return mu_i < c.friction and (scenario.excitation.peak_acceleration(scenario.duration)
+    return mu_i < c.friction and (scenario.motion.peak_acceleration(scenario.duration)
                                   > mu_i * scenario.g)
 
 
@@ -434,7 +434,7 @@ def interface_slip_bounds(scenario: Scenario) -> tuple[str, ...]:
     lo, up = scenario.blocks
     g, mu, mu_i = scenario.g, scenario.contact.friction, scenario.contact.block_friction
     m1, m2 = lo.m, up.m
-    a = scenario.excitation.peak_acceleration(scenario.duration)
+    a = scenario.motion.peak_acceleration(scenario.duration)
     b1, h1, h2 = lo.pivot_half_width, lo.h, up.h
     bc = min(lo.pivot_half_width, up.pivot_half_width)
     out = []
@@ -444,7 +444,7 @@ def interface_slip_bounds(scenario: Scenario) -> tuple[str, ...]:
     if mu_i >= bc / h2:
         out.append(f"interface friction {mu_i:g} at or above the upper block's uplift ratio "
                    f"{bc / h2:.4g} (it could rock)")
-    lam_m = scenario.stack.monolithic(g).lam
+    lam_m = scenario.geometry.column.monolithic(g).lam  # type: ignore[union-attr]
     if mu_i >= math.tan(lam_m):
         out.append(f"interface friction {mu_i:g} at or above the stack's uplift ratio "
                    f"{math.tan(lam_m):.4g} (the stuck stack could rock)")
@@ -464,16 +464,17 @@ def slides(scenario: Scenario) -> bool:
     the cases its bounds do not cover rather than leave them to a rocking model
     that assumes no slip).
     """
-    if not isinstance(scenario.stack, Stack):  # an assembly: no sliding reference
+    col = scenario.geometry.column
+    if col is None:  # no column: no sliding reference
         return False
     if interface_slips(scenario):
         return True
-    if scenario.initial_tilt != 0.0 or any(scenario.stack.offsets):
+    if scenario.initial_tilt != 0.0 or not col.centred:
         return False
     mu = scenario.contact.friction
-    if mu >= math.tan(scenario.critical_angle):
+    if mu >= math.tan(critical_angle(scenario.geometry)):
         return False
-    return scenario.excitation.peak_acceleration(scenario.duration) > mu * scenario.g
+    return scenario.motion.peak_acceleration(scenario.duration) > mu * scenario.g
 
 
 def sliding_reference(scenario: Scenario, *, scan_step: float = SCAN_STEP) -> Trajectory:
@@ -503,7 +504,8 @@ def sliding_reference(scenario: Scenario, *, scan_step: float = SCAN_STEP) -> Tr
         Tilted or off-centre blocks, friction at or above an uplift ratio
         (the block could rock), or an interface slip outside the exact bounds.
     """
-    if scenario.initial_tilt != 0.0 or any(scenario.stack.offsets):
+    col = scenario.geometry.column
+    if scenario.initial_tilt != 0.0 or col is None or not col.centred:
         raise UnsupportedScenario("the sliding reference needs upright, centred blocks")
     on_interface = interface_slips(scenario)
     if on_interface:
@@ -513,18 +515,18 @@ def sliding_reference(scenario: Scenario, *, scan_step: float = SCAN_STEP) -> Tr
         mu = scenario.contact.block_friction
     else:
         mu = scenario.contact.friction
-        ratio = math.tan(scenario.critical_angle)
+        ratio = math.tan(critical_angle(scenario.geometry))
         if mu >= ratio:
             raise UnsupportedScenario(
                 f"the sliding reference needs friction {mu:g} below the uplift ratio "
                 f"{ratio:.4g} (the block could rock)"
             )
-    exc = scenario.excitation
+    exc = scenario.motion.x
     t_out = scenario.output_times()
     start = time.perf_counter()
     sol = solve_sliding(exc, mu, g=scenario.g, t_out=t_out, scan_step=scan_step)
     wall = time.perf_counter() - start
-    c = scenario.stack.centroids
+    c = scenario.geometry.centroids
     nb = scenario.n_blocks
     ug = np.asarray(exc.displacement(t_out), float)
     # which blocks carry the slip: all of them (one body on the base), or the upper one
@@ -535,7 +537,8 @@ def sliding_reference(scenario: Scenario, *, scan_step: float = SCAN_STEP) -> Tr
     return Trajectory(
         t=t_out, theta=np.zeros((t_out.size, nb)), x=x, z=z, status=Status.OK,
         message=f"slid {sol.path:.6g} m {where} in {sol.slip_times.size} slip phase(s)",
-        wall_time=wall, engine="analytic", engine_version=f"sliding-{rockbench.__version__}",
+        wall_time=wall, engine="analytic",
+        engine_version=f"sliding-{provenance.code_version('reference')}",
         settings={"scan_step": scan_step, "brentq_xtol": 1e-15}, scenario=scenario.name,
         extra={
             "model": "coulomb-interface-sliding" if on_interface else "coulomb-sliding",
@@ -553,5 +556,5 @@ def slip_of(traj: Trajectory, scenario: Scenario, block: int = 0) -> np.ndarray:
     s = x − x_upright − u_g; meaningful while the block does not rock.
     """
     t = traj.t
-    x0 = scenario.stack.centroids[block, 0]
-    return traj.x[:, block] - x0 - np.asarray(scenario.excitation.displacement(t), float)
+    x0 = scenario.geometry.centroids[block, 0]
+    return traj.x[:, block] - x0 - np.asarray(scenario.motion.x.displacement(t), float)

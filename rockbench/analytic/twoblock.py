@@ -24,7 +24,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-import rockbench
+from rockbench import provenance
 from rockbench.analytic.housner import scalar_acceleration
 from rockbench.analytic.twoblock_model import (
     BlockParams,
@@ -33,7 +33,7 @@ from rockbench.analytic.twoblock_model import (
     parse_pattern,
 )
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import Excitation, Scenario
+from rockbench.scenarios import Motion, Scenario
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = [
@@ -529,7 +529,7 @@ def solve_two_blocks(
 class _ScalarAccel:
     """Fast scalar evaluation of a known excitation, falling back to the vectorised one."""
 
-    def __init__(self, exc: Excitation, scalar: Callable[[float], float] | None) -> None:
+    def __init__(self, exc: Motion, scalar: Callable[[float], float] | None) -> None:
         self.exc = exc
         self.scalar = scalar
 
@@ -539,7 +539,7 @@ class _ScalarAccel:
         return self.exc.acceleration(t)
 
 
-def _fast_accel(exc: Excitation) -> _ScalarAccel:
+def _fast_accel(exc: Motion) -> _ScalarAccel:
     # the single-block solver's checked plain-math copies of the excitations
     return _ScalarAccel(exc, scalar_acceleration(exc))
 
@@ -573,19 +573,19 @@ def two_block_reference(scenario: Scenario) -> Trajectory:
     rockbench.errors.UnsupportedScenario
         If the scenario does not have exactly two centred blocks.
     """
-    if scenario.n_blocks != 2:
+    col = scenario.geometry.column
+    if col is None or len(col) != 2:
         raise UnsupportedScenario(
-            f"two-block reference needs exactly 2 blocks, scenario {scenario.name!r} has "
-            f"{scenario.n_blocks}"
-        )
-    if any(o != 0.0 for o in scenario.stack.offsets):
+            f"two-block reference needs exactly 2 stacked blocks, scenario {scenario.name!r} "
+            f"has another geometry")
+    if not col.centred:
         raise UnsupportedScenario(
-            f"two-block reference needs centred blocks (zero offsets), got "
-            f"{scenario.stack.offsets}"
-        )
-    lo_blk, up_blk = scenario.blocks
+            f"two-block reference needs centred blocks (zero offsets), got {col.offsets}")
+    if scenario.motion.axes not in ((), ("x",)):
+        raise UnsupportedScenario("the two-block reference takes a base motion along x only")
+    lo_blk, up_blk = col.blocks
     lower, upper = BlockParams.from_block(lo_blk), BlockParams.from_block(up_blk)
-    exc = scenario.excitation
+    exc = scenario.motion.x
     accel = _fast_accel(exc)
     t_out = scenario.output_times()
     th0 = float(scenario.theta0)
@@ -618,7 +618,7 @@ def two_block_reference(scenario: Scenario) -> Trajectory:
     return Trajectory(
         t=t_out, theta=theta, x=x, z=z, wobble=np.zeros_like(theta), status=status,
         message=msg, wall_time=wall, engine="analytic",
-        engine_version=f"twoblock-{rockbench.__version__}", settings=settings,
+        engine_version=f"twoblock-{provenance.code_version('reference')}", settings=settings,
         scenario=scenario.name, impacts=sol.impact_times,
         extra={
             "patterns": [[float(t), n] for t, n in sol.patterns],

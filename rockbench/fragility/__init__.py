@@ -10,7 +10,8 @@ from rockbench.fragility.fit import (
     bootstrap_fragility,
     fit_fragility,
 )
-from rockbench.fragility.intensity import (
+from rockbench.fragility.monotonicity import Island, find_non_monotone
+from rockbench.scenarios.intensity import (
     IntensityMeasure,
     PulseRatios,
     intensity,
@@ -20,7 +21,6 @@ from rockbench.fragility.intensity import (
     scale_factor,
     scale_record,
 )
-from rockbench.fragility.monotonicity import Island, find_non_monotone
 
 __all__ = [
     "ExceedanceData", "FitStatus", "FragilityBootstrap", "FragilityError", "FragilityFit",

@@ -1,8 +1,21 @@
-"""Scenarios: what is simulated (blocks, stacks, contact, base excitation), files and catalog."""
+"""Scenarios: what is simulated (geometry, contact, base motion), files and catalog."""
 
+from rockbench.geometry import Block, Geometry, Prism, Support, single, stack
+
+# the record sets register their table reader with the excitations on import
+from rockbench.scenarios import record_sets  # noqa: F401
+from rockbench.scenarios.catalog import (
+    catalog,
+    get_scenario,
+    get_suite,
+    resolve_scenarios,
+    suites,
+)
 from rockbench.scenarios.excitation import (
     REPORT_GROUPS,
     STANDARD_GRAVITY,
+    AxialExcitation,
+    Components,
     CosinePulse,
     Excitation,
     Free,
@@ -14,31 +27,21 @@ from rockbench.scenarios.excitation import (
     excitation_from_table,
     excitation_kinds,
 )
-from rockbench.scenarios.model import Block, Contact, RockingProperties, Scenario, Stack
-
-__all__ = [
-    "Block", "Stack", "Contact", "Scenario", "RockingProperties",
-    "Assembly", "Prism", "Support", "TiltTable",
-    "Excitation", "Free", "SinePulse", "CosinePulse", "Sinusoid", "Record", "STANDARD_GRAVITY",
-    "REPORT_GROUPS", "excitation_kinds", "excitation_class", "excitation_from_table",
-]
-# after the model: assembly imports it (and the model imports assembly at its end)
-from rockbench.scenarios.assembly import Assembly, Prism, Support  # noqa: E402
-from rockbench.scenarios.catalog import (  # noqa: E402
-    catalog,
-    get_scenario,
-    get_suite,
-    resolve_scenarios,
-    suites,
-)
-from rockbench.scenarios.files import (  # noqa: E402
+from rockbench.scenarios.files import (
     load_scenario,
     save_scenario,
     scenario_from_dict,
     scenario_to_dict,
 )
+from rockbench.scenarios.model import Contact, Scenario
+from rockbench.scenarios.motion import BaseMotion, Motion, Still
 
-__all__ += [
+__all__ = [
+    "Scenario", "Contact", "Block", "Prism", "Support", "Geometry", "single", "stack",
+    "Excitation", "AxialExcitation", "Motion", "Still", "Components", "BaseMotion", "Free",
+    "SinePulse", "CosinePulse",
+    "Sinusoid", "Record", "TiltTable", "STANDARD_GRAVITY", "REPORT_GROUPS", "excitation_kinds",
+    "excitation_class", "excitation_from_table",
     "catalog", "get_scenario", "get_suite", "resolve_scenarios", "suites",
     "load_scenario", "save_scenario", "scenario_from_dict", "scenario_to_dict",
 ]

@@ -6,20 +6,24 @@ Names follow DESIGN.md: ``free-b0``, ``free-b1-0.5``, ``single-pulse-3.0hz-8mm``
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from pathlib import Path
 
 from rockbench.errors import UnknownScenario
-from rockbench.scenarios.assembly import (
-    Assembly,
+from rockbench.geometry import (
+    Block,
+    Geometry,
     drum_column,
     parapet,
     running_bond_wall,
+    single,
+    stack,
     voussoir_arch,
 )
 from rockbench.scenarios.excitation import SinePulse, Sinusoid
 from rockbench.scenarios.files import load_scenario
-from rockbench.scenarios.model import Block, Contact, Scenario, Stack
+from rockbench.scenarios.model import Contact, Scenario
 from rockbench.scenarios.records import record_scenarios
 
 __all__ = ["catalog", "get_scenario", "suites", "get_suite", "resolve_scenarios",
@@ -47,7 +51,7 @@ PAPER = "Giordano et al. (2025), doi:10.1016/j.istruc.2025.110027"
 #: Peña et al. (2008) granite block "Single #2": the 0.17 m side rocks.
 SINGLE2 = Block(width=0.17, depth=0.502, height=1.0, density=2670.0)
 #: Peña et al. (2008) two-block specimen, 5 mm chamfers.
-STACK2 = Stack((
+STACK2 = stack((
     Block(width=0.20, depth=0.40, height=0.60, density=2670.0, chamfer=0.005),
     Block(width=0.15, depth=0.55, height=0.60, density=2670.0, chamfer=0.005),
 ))
@@ -64,7 +68,7 @@ def _build() -> dict[str, Callable[[], Scenario]]:
         for tilt in tilts:
             name = f"free-{key}" if key == "b0" else f"free-{key}-{tilt}"
             cat[name] = lambda name=name, w=w, d=d, h=h, tilt=tilt, key=key: Scenario(
-                name=name, stack=Stack((Block(w, d, h, mass=1.0),)), initial_tilt=tilt,
+                name=name, geometry=single(Block(w, d, h, mass=1.0)), initial_tilt=tilt,
                 duration=FREE_DURATION, output_rate=RATE,
                 description=f"{key.upper()} free rocking from {tilt} λ ({PAPER}, Section 4)",
             )
@@ -73,7 +77,7 @@ def _build() -> dict[str, Callable[[], Scenario]]:
         for f, a in SINGLE_CASES:
             name = f"single-{kind}-{_hzmm(f, a)}"
             cat[name] = lambda name=name, f=f, a=a, exc_cls=exc_cls, dur=dur, kind=kind: Scenario(
-                name=name, stack=Stack((SINGLE2,)), contact=Contact(friction=1.0),
+                name=name, geometry=single(SINGLE2), contact=Contact(friction=1.0),
                 excitation=exc_cls(frequency=f, amplitude=a / 1000.0), duration=dur,
                 output_rate=RATE,
                 description=f"Single #2 block, {f} Hz / {a} mm {kind} ({PAPER}, Section 5)",
@@ -81,7 +85,7 @@ def _build() -> dict[str, Callable[[], Scenario]]:
         for f, a in STACK_CASES:
             name = f"stack-{kind}-{_hzmm(f, a)}"
             cat[name] = lambda name=name, f=f, a=a, exc_cls=exc_cls, dur=dur, kind=kind: Scenario(
-                name=name, stack=STACK2, contact=Contact(friction=1.0),
+                name=name, geometry=STACK2, contact=Contact(friction=1.0),
                 excitation=exc_cls(frequency=f, amplitude=a / 1000.0), duration=dur,
                 output_rate=RATE,
                 description=f"two stacked blocks, {f} Hz / {a} mm {kind} ({PAPER}, Section 6)",
@@ -167,10 +171,10 @@ def resolve_scenarios(spec: str) -> list[Scenario]:
 #: rockbench.analytic.sliding). The stack has one μ for every contact: it slides on the
 #: base as one body while its interface carries the largest friction it can.
 SLIDING_CASES = (
-    ("slide-single-pulse-3.0hz-8mm-mu0.10", Stack((SINGLE2,)), SinePulse(3.0, 0.008), 0.10, 1.5),
-    ("slide-single-pulse-5.0hz-6mm-mu0.15", Stack((SINGLE2,)), SinePulse(5.0, 0.006), 0.15, 1.5),
-    ("slide-single-sine-3.0hz-8mm-mu0.15", Stack((SINGLE2,)), Sinusoid(3.0, 0.008), 0.15, 3.0),
-    ("slide-b2-pulse-2.0hz-20mm-mu0.20", Stack((Block(*FREE_BLOCKS["b2"], mass=1.0),)),
+    ("slide-single-pulse-3.0hz-8mm-mu0.10", single(SINGLE2), SinePulse(3.0, 0.008), 0.10, 1.5),
+    ("slide-single-pulse-5.0hz-6mm-mu0.15", single(SINGLE2), SinePulse(5.0, 0.006), 0.15, 1.5),
+    ("slide-single-sine-3.0hz-8mm-mu0.15", single(SINGLE2), Sinusoid(3.0, 0.008), 0.15, 3.0),
+    ("slide-b2-pulse-2.0hz-20mm-mu0.20", single(Block(*FREE_BLOCKS["b2"], mass=1.0)),
      SinePulse(2.0, 0.020), 0.20, 1.5),
     ("slide-stack-pulse-5.0hz-4mm-mu0.10", STACK2, SinePulse(5.0, 0.004), 0.10, 1.5),
 )
@@ -178,9 +182,9 @@ SLIDING_CASES = (
 
 def _sliding() -> dict[str, Callable[[], Scenario]]:
     cat: dict[str, Callable[[], Scenario]] = {}
-    for name, stack, exc, mu, dur in SLIDING_CASES:
-        cat[name] = lambda name=name, stack=stack, exc=exc, mu=mu, dur=dur: Scenario(
-            name=name, stack=stack, contact=Contact(friction=mu), excitation=exc,
+    for name, geo, exc, mu, dur in SLIDING_CASES:
+        cat[name] = lambda name=name, geo=geo, exc=exc, mu=mu, dur=dur: Scenario(
+            name=name, geometry=geo, contact=Contact(friction=mu), excitation=exc,
             duration=dur, output_rate=RATE,
             description=f"low friction μ = {mu:g}: slides without rocking (Coulomb sliding)",
         )
@@ -203,7 +207,7 @@ def _interface_sliding() -> dict[str, Callable[[], Scenario]]:
     cat: dict[str, Callable[[], Scenario]] = {}
     for name, exc, mu, mu_i, dur in INTERFACE_SLIDING_CASES:
         cat[name] = lambda name=name, exc=exc, mu=mu, mu_i=mu_i, dur=dur: Scenario(
-            name=name, stack=STACK2, contact=Contact(friction=mu, interface_friction=mu_i),
+            name=name, geometry=STACK2, contact=Contact(friction=mu, interface_friction=mu_i),
             excitation=exc, duration=dur, output_rate=RATE,
             description=f"interface friction μᵢ = {mu_i:g} under base friction μ = {mu:g}: "
                         "the upper block slides on the lower one (Coulomb sliding)",
@@ -214,9 +218,9 @@ def _interface_sliding() -> dict[str, Callable[[], Scenario]]:
 _CATALOG.update(_interface_sliding())
 
 
-#: Masonry assemblies at rest on a still base (issue 18): name → builder. The families
-#: are parametrised (rockbench.scenarios.assembly); the catalog keeps a few members each.
-ASSEMBLY_CASES: dict[str, Callable[[], Assembly]] = {
+#: Masonry assemblies at rest on a still base: name → builder. The families are
+#: parametrised (rockbench.geometry.builders); the catalog keeps a few members each.
+ASSEMBLY_CASES: dict[str, Callable[[], Geometry]] = {
     **{f"column-{n}drums": (lambda n=n: drum_column(n)) for n in (3, 5, 10)},
     **{f"parapet-offset{e:.2f}": (lambda e=e: parapet(e)) for e in (0.0, 0.25)},
     **{f"wall-{c}x{b}": (lambda c=c, b=b: running_bond_wall(c, b)) for c, b in ((6, 3), (10, 3))},
@@ -225,22 +229,25 @@ ASSEMBLY_CASES: dict[str, Callable[[], Assembly]] = {
 }
 #: Family prefixes of ASSEMBLY_CASES; each has the suite ``assembly-<family>``.
 ASSEMBLY_FAMILIES = ("column", "parapet", "wall", "arch")
+#: Family → (description with the case's parameters, how to read a name's parameters).
 _ASSEMBLY_TEXT = {
-    "column": "multi-drum column of {n} drums 0.6 × 0.5 m",
-    "parapet": "parapet 0.3 × 0.8 m on a wall 0.6 × 1.2 m, its centre {n} from the wall's",
-    "wall": "dry-stack wall panel in running bond, {n} (courses x bricks), bricks 0.24 × 0.12 m",
-    "arch": "semicircular arch R = 1 m, {n} on two springer supports",
+    "column": "multi-drum column of {} drums 0.6 × 0.5 m",
+    "parapet": "parapet 0.3 × 0.8 m on a wall 0.6 × 1.2 m, its centre {} m from the wall's",
+    "wall": "dry-stack wall panel in running bond, {} courses of {} bricks 0.24 × 0.12 m",
+    "arch": "semicircular arch R = 1 m of {} voussoirs {} m thick on two springer supports",
 }
+#: The numbers of a case name (``column-5drums`` → 5, ``arch-9v-t0.15`` → 9, 0.15).
+_NUMBER = re.compile(r"\d+(?:\.\d+)?")
 
 
 def _assemblies() -> dict[str, Callable[[], Scenario]]:
     cat: dict[str, Callable[[], Scenario]] = {}
     for name, build in ASSEMBLY_CASES.items():
         family, param = name.split("-", 1)
-        text = _ASSEMBLY_TEXT[family].format(n=param)
+        text = _ASSEMBLY_TEXT[family].format(*_NUMBER.findall(param))
         cat[name] = lambda name=name, build=build, text=text: Scenario(
-            name=name, stack=build(), contact=Contact(friction=1.0), duration=2.0,
-            output_rate=RATE, description=f"{text}, at rest (issue 18)",
+            name=name, geometry=build(), contact=Contact(friction=1.0), duration=2.0,
+            output_rate=RATE, description=f"{text}, at rest",
         )
     return cat
 

@@ -27,10 +27,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from rockbench import checks
 from rockbench.errors import ScenarioError
-from rockbench.scenarios import checks
+from rockbench.scenarios.motion import BaseMotion, Motion
 
-__all__ = ["Excitation", "Free", "SinePulse", "CosinePulse", "Sinusoid", "Record", "TiltTable",
+__all__ = ["Excitation", "AxialExcitation", "Components", "Free", "SinePulse", "CosinePulse",
+           "Sinusoid", "Record", "TiltTable", "register_set_reader",
            "STANDARD_GRAVITY", "MAX_BASE_ACCELERATION", "REPORT_GROUPS", "excitation_kinds",
            "excitation_class", "excitation_from_table"]
 
@@ -68,12 +70,14 @@ def _plausible(peak: float, what: str) -> None:
 
 
 class Excitation(ABC):
-    """Horizontal base motion u_g(t) along +x, at rest at t = 0.
+    """What a scenario's ``[excitation]`` table describes: a base motion, at rest at t = 0.
 
     A concrete subclass declares the class variables ``kind`` and
-    ``report_group`` and implements the motion, :meth:`from_table` and
+    ``report_group`` and implements :meth:`base_motion`, :meth:`from_table` and
     :meth:`to_table`; defining it registers it under its kind (a subclass
-    without its own ``kind``, such as a shared base, is not registered).
+    without its own ``kind``, such as a shared base, is not registered). The
+    one-dimensional motions along x are :class:`Motion` s; :class:`Components`
+    combines three of them.
     """
 
     #: Name used in scenario files (``type = "..."`` of the ``[excitation]`` table).
@@ -100,6 +104,10 @@ class Excitation(ABC):
             raise TypeError(f"excitation kind {kind!r} is already registered by "
                             f"{old.__module__}.{old.__qualname__}")
         _REGISTRY[kind] = cls
+
+    @abstractmethod
+    def base_motion(self) -> BaseMotion:
+        """The three-component ground motion this excitation produces."""
 
     @classmethod
     @abstractmethod
@@ -142,84 +150,23 @@ class Excitation(ABC):
             raise ScenarioError(f"{where} needs {' and '.join(map(repr, missing))}")
         return data
 
-    def scalar_acceleration(self) -> Callable[[float], float]:
-        """ü_g(t) for one float time, returning a float: what ODE right-hand sides call.
-
-        This default wraps :meth:`acceleration`; the built-in excitations return
-        plain-``math`` formulas instead, since a vectorised call on one float
-        costs tens of µs and dominates long forced integrations.
-        """
-        return lambda t: float(self.acceleration(t))
-
-    @abstractmethod
-    def acceleration(self, t: ArrayLike) -> ArrayLike:
-        """Base acceleration ü_g(t) in m/s²."""
-
-    @abstractmethod
-    def velocity(self, t: ArrayLike) -> ArrayLike:
-        """Base velocity u̇_g(t) in m/s (exact integral of the acceleration)."""
-
-    @abstractmethod
-    def displacement(self, t: ArrayLike) -> ArrayLike:
-        """Base displacement u_g(t) in m (exact integral of the velocity)."""
-
     @property
     def end_time(self) -> float:
         """Time after which the base stands still (``inf`` if never)."""
-        return math.inf
-
-    @property
-    def breakpoints(self) -> tuple[float, ...]:
-        """Times where ü_g is not smooth; ODE integrators restart there."""
-        return ()
+        return self.base_motion().end_time
 
     @property
     def is_free(self) -> bool:
         """True when the base never moves."""
-        return False
+        return self.base_motion().is_free
 
-    def peak_acceleration(self, t_end: float = math.inf) -> float:
-        """Largest |ü_g| over [0, t_end] (sampled finely)."""
-        t_end = min(t_end, self.end_time if math.isfinite(self.end_time) else t_end)
-        if not math.isfinite(t_end) or t_end <= 0:
-            return 0.0
-        t = np.linspace(0.0, t_end, 20001)
-        return float(np.max(np.abs(self.acceleration(t))))
 
-    def peak_velocity(self) -> float:
-        """PGV: the largest |u̇_g| over the whole motion (m/s).
+class AxialExcitation(Motion, Excitation):
+    """An excitation that is one motion along x (every kind but :class:`Components`)."""
 
-        Records and pulses give it exactly; this default samples the velocity
-        finely over the motion.
-
-        Raises
-        ------
-        ScenarioError
-            For a motion that never ends (no peak over a finite time).
-        """
-        if not math.isfinite(self.end_time):
-            raise ScenarioError(f"the PGV of a {self.kind!r} excitation, which never ends, "
-                                "is not defined")
-        if self.end_time <= 0:
-            return 0.0
-        t = np.linspace(0.0, self.end_time, 20001)
-        return float(np.max(np.abs(self.velocity(t))))
-
-    def motion_bounds(self, t_end: float = math.inf) -> tuple[float, float]:
-        """Upper bounds on |u_g| and |u̇_g| over [0, t_end] (m, m/s).
-
-        What a scene needs to size its ground and what the engine watchdog
-        needs to bound speeds. Built-in excitations give them in closed form
-        (exact for pulses); this default samples the motion finely.
-        """
-        t_end = min(t_end, self.end_time)
-        if t_end <= 0:
-            return 0.0, 0.0
-        if not math.isfinite(t_end):
-            raise ValueError(f"{type(self).__name__} never ends: give a finite t_end")
-        t = np.linspace(0.0, t_end, 20001)
-        return (float(np.max(np.abs(self.displacement(t)))),
-                float(np.max(np.abs(self.velocity(t)))))
+    def base_motion(self) -> BaseMotion:
+        """The motion along x, the base still along y and z."""
+        return BaseMotion(x=self)
 
 
 def excitation_kinds() -> tuple[str, ...]:
@@ -271,7 +218,7 @@ def excitation_from_table(table: Any, *, source: Path | None = None) -> Excitati
 
 
 @dataclass(frozen=True)
-class Free(Excitation):
+class Free(AxialExcitation):
     """No base motion (free rocking from an initial tilt)."""
 
     kind: ClassVar[str] = "free"
@@ -304,7 +251,7 @@ class Free(Excitation):
 
 
 @dataclass(frozen=True)
-class _Pulse(Excitation):
+class _Pulse(AxialExcitation):
     """Shared part of the one-sine and one-cosine acceleration pulses.
 
     Subclasses give the shape through :meth:`acceleration`, :meth:`velocity`
@@ -498,7 +445,7 @@ class CosinePulse(_Pulse):
 
 
 @dataclass(frozen=True)
-class Sinusoid(Excitation):
+class Sinusoid(AxialExcitation):
     """Harmonic displacement u_g = A sin(ωt)·w(t) with smooth sin² ramps.
 
     Parameters
@@ -653,7 +600,7 @@ class Sinusoid(Excitation):
 
 
 @dataclass(frozen=True)
-class Record(Excitation):
+class Record(AxialExcitation):
     """A recorded accelerogram, linearly interpolated and integrated exactly.
 
     The acceleration between samples is linear; velocity and displacement are its
@@ -827,14 +774,15 @@ class Record(Excitation):
 
         ``units`` (``"g"`` or ``"m/s2"``) applies to a file; inline accelerations
         are in m/s². ``scale`` multiplies the accelerations. A table with ``set``
-        names a record of an installed record set instead
-        (:class:`~rockbench.scenarios.record_sets.SetRecord`).
+        names a record of an installed record set instead, read by the reader
+        that :mod:`rockbench.scenarios.record_sets` registers
+        (:func:`register_set_reader`).
         """
         if isinstance(table, Mapping) and ("set" in table or "record" in table):
-            # imported here: the record sets load optional packages
-            from rockbench.scenarios.record_sets import SetRecord
-
-            return SetRecord.from_table(table, source=source)
+            if _SET_READER is None:
+                raise ScenarioError("[excitation] names a record set, but no record-set reader "
+                                    "is registered (import rockbench.scenarios)")
+            return _SET_READER(table, source=source)
         data = cls.read_fields(table)
         scale = data.get("scale", 1.0)
         checks.number(scale, "record scale")
@@ -916,6 +864,17 @@ class Record(Excitation):
 #: Units a record file may give its accelerations in.
 _UNITS = ("g", "m/s2")
 
+#: Reads a ``type = "record"`` table that names a record of a set (``set``,
+#: ``record``): registered by :mod:`rockbench.scenarios.record_sets`, which builds
+#: on this module (so this module cannot import it).
+_SET_READER: Callable[..., Record] | None = None
+
+
+def register_set_reader(reader: Callable[..., Record]) -> None:
+    """Register the reader of record-set tables (:mod:`rockbench.scenarios.record_sets`)."""
+    global _SET_READER
+    _SET_READER = reader
+
 
 def _short(line: str, limit: int = 60) -> str:
     """repr of a file line, cut to ``limit`` characters for a one-line message."""
@@ -972,7 +931,7 @@ def _parse_at2(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 @dataclass(frozen=True)
-class TiltTable(Excitation):
+class TiltTable(AxialExcitation):
     """A tilting table, as the base acceleration ramp that loads the blocks alike.
 
     ü_g(t) = −direction · rate · g · (t − delay) for t ≥ delay (the base is
@@ -1059,3 +1018,74 @@ class TiltTable(Excitation):
     def to_table(self) -> dict[str, Any]:
         return {"type": self.kind, "rate": self.rate, "direction": self.direction,
                 "gravity": self.gravity, "delay": self.delay}
+
+
+@dataclass(frozen=True)
+class Components(Excitation):
+    """Three one-dimensional motions at once: x and y horizontal, z vertical.
+
+    Each component is any :class:`Motion` (a pulse, a sinusoid, a record, ...)
+    given as its own table, ``[excitation.x]``, ``[excitation.y]``,
+    ``[excitation.z]``; a component left out stands still::
+
+        [excitation]
+        type = "components"
+        [excitation.x]
+        type = "record"
+        file = "RSN6_IMPVALL.I_I-ELC180.AT2"
+        [excitation.z]
+        type = "record"
+        file = "RSN6_IMPVALL.I_I-ELC-UP.AT2"
+
+    Parameters
+    ----------
+    x, y, z : Motion
+        The motion along each axis (default: none).
+    """
+
+    x: AxialExcitation = field(default_factory=Free)
+    y: AxialExcitation = field(default_factory=Free)
+    z: AxialExcitation = field(default_factory=Free)
+    kind: ClassVar[str] = "components"
+    report_group: ClassVar[str] = "record"
+    table_keys: ClassVar[frozenset[str]] = frozenset({"x", "y", "z"})
+
+    def __post_init__(self) -> None:
+        for axis in ("x", "y", "z"):
+            if not isinstance(getattr(self, axis), AxialExcitation):
+                raise ScenarioError(f"[excitation.{axis}] must be a one-dimensional motion "
+                                    f"(a pulse, a sinusoid, a record, ...), got "
+                                    f"{checks.describe(getattr(self, axis))}")
+
+    def base_motion(self) -> BaseMotion:
+        return BaseMotion(self.x, self.y, self.z)
+
+    @property
+    def group(self) -> str:
+        """The report group of its first moving component (x, then y, then z)."""
+        moving = [c for c in (self.x, self.y, self.z) if not c.is_free]
+        return moving[0].report_group if moving else Free.report_group
+
+    @classmethod
+    def from_table(cls, table: Mapping[str, Any], *, source: Path | None = None) -> Components:
+        data = cls.read_fields(table)
+        parts = {}
+        for axis, sub in data.items():
+            try:
+                motion = excitation_from_table(sub, source=source)
+            except ScenarioError as exc:
+                raise ScenarioError(str(exc).replace("[excitation]", f"[excitation.{axis}]", 1)
+                                    ) from None
+            if not isinstance(motion, AxialExcitation):
+                raise ScenarioError(f"[excitation.{axis}] must be a one-dimensional motion, "
+                                    f"not {motion.kind!r}")
+            parts[axis] = motion
+        return cls(**parts)
+
+    def to_table(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"type": self.kind}
+        for axis in ("x", "y", "z"):
+            c = getattr(self, axis)
+            if not c.is_free:
+                out[axis] = c.to_table()
+        return out

@@ -1,16 +1,16 @@
 """Scenario files: TOML load and save (round trip), strict about unknown keys and types.
 
-Each table is checked here with :mod:`rockbench.scenarios.checks` (a string, boolean,
+Each table is checked here with :mod:`rockbench.checks` (a string, boolean,
 list or table is never read as a number); the ``[excitation]`` table is read by the
 excitation class its ``type`` names (:func:`~rockbench.scenarios.excitation.excitation_from_table`).
 
-A file describes a stack (blocks bottom first, each centred on the one below
-but for its ``offset``) unless a block has a pose (``x``, ``z``, ``angle``) or
-``vertices``, or the file has ``[[supports]]``: then it is an
-:class:`~rockbench.scenarios.assembly.Assembly`, every block placed where it
-says (``width``/``height`` rectangles by their centroid, ``vertices`` polygons
-by their own frame) and every support a fixed polygon ``vertices`` moving with
-the base.
+Both forms describe one :class:`~rockbench.geometry.Geometry`: a stack (blocks
+bottom first, each centred on the one below but for its ``offset``), unless a
+block has a pose (``x``, ``z``, ``angle``) or ``vertices``, or the file has
+``[[supports]]``: then every block is placed where it says (``width``/``height``
+rectangles by their centroid, ``vertices`` polygons by their own frame) and
+every support is a fixed polygon ``vertices`` moving with the base. A geometry
+is written in the stack form when that form rebuilds it exactly.
 """
 
 from __future__ import annotations
@@ -20,11 +20,12 @@ from typing import Any
 
 import tomli_w
 
+from rockbench import checks
 from rockbench.errors import ScenarioError
-from rockbench.scenarios import checks
-from rockbench.scenarios.assembly import Assembly, Prism, Support
+from rockbench.geometry import Block, Body, Geometry, Prism, Support, stack
+from rockbench.geometry.builders import stack_poses
 from rockbench.scenarios.excitation import Excitation, excitation_from_table
-from rockbench.scenarios.model import Block, Contact, Scenario, Stack
+from rockbench.scenarios.model import Contact, Scenario
 from rockbench.tomlfile import read_toml
 
 __all__ = ["load_scenario", "save_scenario", "scenario_from_dict", "scenario_to_dict"]
@@ -60,24 +61,24 @@ def _blocks(raw_blocks: Any) -> tuple[list[Block], list[float]]:
     return blocks, offsets
 
 
-def _is_assembly(data: dict[str, Any]) -> bool:
+def _has_poses(data: dict[str, Any]) -> bool:
     raw = data.get("blocks")
     tables = raw if isinstance(raw, list) else []
     return "supports" in data or any(isinstance(b, dict) and _POSE & set(b) for b in tables)
 
 
-def _assembly(raw_blocks: Any, raw_supports: Any) -> Assembly:
+def _placed(raw_blocks: Any, raw_supports: Any) -> Geometry:
     if not isinstance(raw_blocks, list) or not raw_blocks:
         got = "" if raw_blocks is None else f", got {checks.describe(raw_blocks)}"
         raise ScenarioError(f"scenario needs at least one [[blocks]] table{got}")
-    blocks: list[Block | Prism] = []
+    blocks: list[Body] = []
     poses = []
     for i, raw in enumerate(raw_blocks, 1):
         where = f"[[blocks]] #{i}"
         raw = checks.table(raw, where)
         if "offset" in raw:
-            raise ScenarioError(f"{where}: 'offset' is for stacks; in an assembly (a file with "
-                                f"poses, vertices or [[supports]]) give the centroid 'x'")
+            raise ScenarioError(f"{where}: 'offset' is for stacks; in a file with poses, "
+                                f"vertices or [[supports]] give the centroid 'x'")
         checks.no_unknown(raw, _ASSEMBLY_BLOCK, where)
         pose = (raw.pop("x", 0.0), raw.pop("z", None), raw.pop("angle", 0.0))
         try:
@@ -119,7 +120,7 @@ def _assembly(raw_blocks: Any, raw_supports: Any) -> Assembly:
             except ScenarioError as exc:
                 raise ScenarioError(f"{where}: {exc}") from None
     try:
-        return Assembly(tuple(blocks), tuple(poses), tuple(supports))
+        return Geometry(tuple(blocks), tuple(poses), tuple(supports))
     except ScenarioError as exc:
         msg = str(exc)
         for i in range(len(blocks), 0, -1):  # name the file's tables, numbered from 1
@@ -148,11 +149,11 @@ def scenario_from_dict(data: dict[str, Any], *, source: Path | None = None,
     """
     data = checks.table(data, "scenario")
     checks.no_unknown(data, _TOP, "the scenario file")
-    if _is_assembly(data):
-        stack: Stack | Assembly = _assembly(data.get("blocks"), data.get("supports"))
+    if _has_poses(data):
+        geometry = _placed(data.get("blocks"), data.get("supports"))
     else:
         blocks, offsets = _blocks(data.get("blocks"))
-        stack = Stack(tuple(blocks), tuple(offsets))
+        geometry = stack(tuple(blocks), tuple(offsets))
     contact_raw = checks.table(data.get("contact", {}), "[contact]")
     checks.no_unknown(contact_raw, _CONTACT, "[contact]")
     initial = checks.table(data.get("initial", {}), "[initial]")
@@ -167,10 +168,10 @@ def scenario_from_dict(data: dict[str, Any], *, source: Path | None = None,
         raise ScenarioError(f"[initial] tilt must be a number (fraction of λ), got "
                             f"{checks.describe(tilt)}")
     if "tilt_rad" in initial:
-        if isinstance(stack, Assembly):
-            raise ScenarioError("[initial] tilt_rad is for stacks; an assembly's blocks take "
-                                "their own angle")
-        lam = stack.blocks[0].rocking(float(g)).lam
+        if geometry.column is None:
+            raise ScenarioError("[initial] tilt_rad is for a column of blocks on the base; "
+                                "this geometry's blocks take their own angle")
+        lam = geometry.column.blocks[0].rocking(float(g)).lam
         rad = checks.number(initial["tilt_rad"], "[initial] tilt_rad", unit="rad")
         if not abs(rad) < lam:
             raise ScenarioError(f"[initial] tilt_rad must be smaller in size than the bottom "
@@ -181,9 +182,9 @@ def scenario_from_dict(data: dict[str, Any], *, source: Path | None = None,
     return Scenario(
         name=name,
         description=description,
-        stack=stack,
+        geometry=geometry,
         contact=Contact(**contact_raw),
-        excitation=_excitation(data.get("excitation", {"type": "free"}), source, stack, g),
+        excitation=_excitation(data.get("excitation", {"type": "free"}), source, geometry, g),
         initial_tilt=tilt,
         duration=data.get("duration", 10.0),
         output_rate=data.get("output_rate", 1000.0),
@@ -191,18 +192,19 @@ def scenario_from_dict(data: dict[str, Any], *, source: Path | None = None,
     )
 
 
-def _excitation(table: Any, source: Path | None, stack: Stack | Assembly,
+def _excitation(table: Any, source: Path | None, geometry: Geometry,
                 g: float) -> Excitation:
     """The ``[excitation]``; a record of a set scaled to a block-normalised intensity
-    (``pga-uplift``, ``pgv-rocking``) needs the rocking constants of the stack just built:
-    its block's, or a stack's as one body."""
+    (``pga-uplift``, ``pgv-rocking``) needs the rocking constants of the column just
+    built: its block's, or a stack's as one body."""
     if not (isinstance(table, dict) and table.get("type") == "record" and "set" in table
             and "measure" in table):
         return excitation_from_table(table, source=source)
     from rockbench.scenarios.record_sets import SetRecord  # optional packages
 
-    rocking = (None if isinstance(stack, Assembly) else stack.blocks[0].rocking(float(g))
-               if len(stack.blocks) == 1 else stack.monolithic(float(g)))
+    col = geometry.column
+    rocking = (None if col is None else col.blocks[0].rocking(float(g))
+               if len(col) == 1 else col.monolithic(float(g)))
     try:
         return SetRecord.from_table(table, source=source, rocking=rocking, g=float(g))
     except ScenarioError as exc:
@@ -213,18 +215,9 @@ def _excitation(table: Any, source: Path | None, stack: Stack | Assembly,
 
 def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
     """The TOML structure of a scenario (inverse of :func:`scenario_from_dict`)."""
-    stack = scenario.stack
-    supports: list[dict[str, Any]] = []
-    if isinstance(stack, Assembly):
-        tables = stack.to_dict()
-        blocks, supports = tables["blocks"], tables.get("supports", [])
-    else:
-        blocks = []
-        for b, off in zip(stack.blocks, stack.offsets, strict=True):
-            d = b.to_dict()
-            if off:
-                d["offset"] = off
-            blocks.append(d)
+    geo = scenario.geometry
+    blocks = _geometry_tables(geo)
+    supports = [s.to_dict() for s in geo.supports]
     out: dict[str, Any] = {"name": scenario.name}
     if scenario.description:
         out["description"] = scenario.description
@@ -238,6 +231,25 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         "initial": {"tilt": scenario.initial_tilt},
         "excitation": scenario.excitation.to_table(),
     })
+    return out
+
+
+def _geometry_tables(geo: Geometry) -> list[dict[str, Any]]:
+    """The ``[[blocks]]`` tables: the stack form where it rebuilds the geometry exactly."""
+    col = geo.column
+    if col is not None and stack_poses(col.blocks, col.offsets) == geo.poses:
+        out = []
+        for b, off in zip(col.blocks, col.offsets, strict=True):
+            d = b.to_dict()
+            if off:
+                d["offset"] = off
+            out.append(d)
+        return out
+    out = []
+    for b, (x, z, a) in zip(geo.bodies, geo.poses, strict=True):
+        d = b.to_dict()
+        d.update({"x": x, "z": z, "angle": a})
+        out.append(d)
     return out
 
 

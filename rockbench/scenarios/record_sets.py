@@ -21,7 +21,7 @@ becomes a :class:`~rockbench.scenarios.excitation.Record`: linear between
 samples, baseline-corrected once by a constant so that the base ends at rest,
 with velocity and displacement its exact integrals. The PGA and PGV listed in
 the catalogue are those of that corrected motion (exact, see
-:mod:`rockbench.fragility.intensity`).
+:mod:`rockbench.scenarios.intensity`).
 """
 
 from __future__ import annotations
@@ -42,16 +42,16 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from rockbench import checks
 from rockbench.errors import ScenarioError
-from rockbench.fragility.intensity import (
+from rockbench.geometry import RockingProperties
+from rockbench.scenarios.excitation import STANDARD_GRAVITY, Record, register_set_reader
+from rockbench.scenarios.intensity import (
     IntensityMeasure,
     peak_ground_acceleration,
     peak_ground_velocity,
     scale_factor,
 )
-from rockbench.scenarios import checks
-from rockbench.scenarios.excitation import STANDARD_GRAVITY, Record
-from rockbench.scenarios.model import RockingProperties
 
 __all__ = ["RecordInfo", "RecordSet", "UnavailableRecordSet", "RecordSetUnavailable",
            "SetRecord", "RECORDS_EXTRA", "record_set_names", "record_sets", "get_record_set",
@@ -474,3 +474,6 @@ def load_record(set_name: str, record_name: str, *, scale: float = 1.0,
     if not math.isfinite(float(scale)):
         raise ScenarioError(f"record scale must be finite, got {scale!r}")
     return dataclasses.replace(base, scale=float(scale))
+
+
+register_set_reader(SetRecord.from_table)

@@ -12,8 +12,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
+from rockbench.geometry import Block, single
 from rockbench.scenarios.excitation import Record
-from rockbench.scenarios.model import Block, Contact, Scenario, Stack
+from rockbench.scenarios.model import Contact, Scenario
 
 __all__ = ["RECORDS_DIR", "record_path", "record_scenarios", "RECORD_CASES"]
 
@@ -47,7 +48,7 @@ def record_scenarios() -> dict[str, Callable[[], Scenario]]:
                  scale: float = scale) -> Scenario:
             block, what = _BLOCKS[key]
             exc = Record.from_file(record_path(file), scale=scale)
-            return Scenario(name=name, stack=Stack((block,)), contact=Contact(friction=1.0),
+            return Scenario(name=name, geometry=single(block), contact=Contact(friction=1.0),
                             excitation=exc, duration=RECORD_DURATION, output_rate=1000.0,
                             description=f"{what} under the synthetic record {file} × {scale:g} "
                                         f"(rockbench/data/records)")

@@ -2,7 +2,7 @@
 
 The reference for quasi-static collapse (tilting table, pulse-to-collapse at low
 frequency): the smallest horizontal acceleration, as a fraction α of g, that
-starts a mechanism in an :class:`~rockbench.analytic.limit_geometry.Assembly`.
+starts a mechanism in an :class:`~rockbench.geometry.Geometry`.
 
 Model
 -----
@@ -89,8 +89,8 @@ import numpy as np
 from scipy import sparse
 from scipy.optimize import OptimizeResult, linprog
 
-from rockbench.analytic.limit_geometry import Assembly
 from rockbench.errors import ScenarioError
+from rockbench.geometry import Geometry
 
 __all__ = [
     "BlockMotion",
@@ -164,7 +164,7 @@ class InterfaceMotion:
     Attributes
     ----------
     interface : int
-        Index into ``Assembly.interfaces``.
+        Index into ``Geometry.interfaces``.
     opening, slip : ndarray (2,)
         Relative velocity of body b with respect to body a at the end points
         p0, p1, along the interface normal (opening > 0) and tangent.
@@ -192,7 +192,7 @@ class InterfaceForce:
     Attributes
     ----------
     interface : int
-        Index into ``Assembly.interfaces``.
+        Index into ``Geometry.interfaces``.
     normal : ndarray (2,)
         Compressive normal force at the end points p0, p1 (N), ≥ 0.
     shear : ndarray (2,)
@@ -290,10 +290,11 @@ class _System:
     length: float  # length scale L (m): moments are divided by it
 
 
-def _system(assembly: Assembly, direction: int, g: float) -> _System:
-    nb = assembly.n_blocks
+def _system(assembly: Geometry, direction: int, g: float) -> _System:
+    nb = assembly.n_bodies
     length = assembly.size
-    masses = np.array([b.mass for b in assembly.blocks])
+    masses = assembly.masses
+    centroids = assembly.centroids
     total = float(masses.sum())
     rows: list[int] = []
     cols: list[int] = []
@@ -304,9 +305,9 @@ def _system(assembly: Assembly, direction: int, g: float) -> _System:
         for e, p in enumerate((itf.p0, itf.p1)):
             j = 2 * k + e
             for body, sign in ((itf.a, -1.0), (itf.b, 1.0)):
-                if assembly.is_support(body):
+                if assembly.is_fixed(body):
                     continue
-                r = (p - assembly.blocks[body].centroid) / length
+                r = (p - centroids[body]) / length
                 rows += [3 * body, 3 * body + 1, 3 * body + 2]
                 cols += [j, j, j]
                 # moment about +y of a force f at r: r_z f_x − r_x f_z
@@ -477,7 +478,7 @@ def _non_associative(sys: _System, mu: float, x: np.ndarray
                        f"(last α = {alpha:.9g})")
 
 
-def _classify(assembly: Assembly, sys: _System, q: np.ndarray,
+def _classify(assembly: Geometry, sys: _System, q: np.ndarray,
               normal: np.ndarray | None = None
               ) -> tuple[tuple[BlockMotion, ...], tuple[InterfaceMotion, ...], Mode]:
     """Block motions, joint kinds and governing mode of the mechanism ``q``.
@@ -491,30 +492,32 @@ def _classify(assembly: Assembly, sys: _System, q: np.ndarray,
     vel = q.reshape(-1, 3).copy()
     vel[:, 2] /= sys.length  # back to rad/s
     speeds = []
-    for b, (ux, uz, w) in zip(assembly.blocks, vel, strict=True):
-        d = b.vertices - b.centroid
+    cents = assembly.centroids
+    verts = [assembly.world_vertices(i) for i in range(assembly.n_bodies)]
+    for v, c, (ux, uz, w) in zip(verts, cents, vel, strict=True):
+        d = v - c
         speeds.append(float(np.hypot(ux + w * d[:, 1], uz - w * d[:, 0]).max()))
     vmax = max(speeds)
     vel /= vmax
     tol = CLASSIFY_TOL
     motions = []
-    for i, b in enumerate(assembly.blocks):
+    for i, v in enumerate(verts):
         ux, uz, w = vel[i]
-        size = float(np.ptp(b.vertices, axis=0).max())
+        size = float(np.ptp(v, axis=0).max())
         if speeds[i] / vmax < tol:
             motions.append(BlockMotion(i, vel[i], "rest", None, None))
         elif abs(w) * size < tol:
             motions.append(BlockMotion(i, vel[i], "translation", None, None))
         else:
-            centre = b.centroid + np.array([uz / w, -ux / w])
-            dist = np.hypot(*(b.vertices - centre).T)
+            centre = cents[i] + np.array([uz / w, -ux / w])
+            dist = np.hypot(*(v - centre).T)
             pivot = int(np.argmin(dist)) if dist.min() < tol * size else None
             motions.append(BlockMotion(i, vel[i], "rotation", centre, pivot))
     qn = q / vmax
     opening = (sys.h_n.T @ qn).reshape(-1, 2)
     slip = (sys.h_t.T @ qn).reshape(-1, 2)
     joints = []
-    omega = np.append(vel[:, 2], np.zeros(len(assembly.supports)))
+    omega = np.append(vel[:, 2], np.zeros(len(assembly.fixed)))
     for k, itf in enumerate(assembly.interfaces):
         o, s = opening[k], slip[k]
         slipping = np.abs(s) > tol
@@ -546,13 +549,13 @@ def _forces(sys: _System, x: np.ndarray, n_itf: int) -> tuple[InterfaceForce, ..
     return tuple(InterfaceForce(k, nn[k], tt[k]) for k in range(n_itf))
 
 
-def limit_analysis(assembly: Assembly, *, friction: float = math.inf, direction: int = 1,
+def limit_analysis(assembly: Geometry, *, friction: float = math.inf, direction: int = 1,
                    g: float = 9.81, flow: Flow = "associative") -> LimitResult:
     """Collapse load factor and mechanism of ``assembly`` under horizontal inertial loads.
 
     Parameters
     ----------
-    assembly : Assembly
+    assembly : Geometry
         Blocks, supports and their interfaces.
     friction : float
         Coulomb μ of every joint; ``math.inf`` for no sliding.
@@ -609,7 +612,7 @@ def limit_analysis(assembly: Assembly, *, friction: float = math.inf, direction:
                        _forces(sys, x, n_itf), flow, iterations)
 
 
-def stands(assembly: Assembly, *, friction: float = math.inf, g: float = 9.81) -> bool:
+def stands(assembly: Geometry, *, friction: float = math.inf, g: float = 9.81) -> bool:
     """True if ``assembly`` can be in equilibrium under its own weight alone.
 
     The static LP's feasibility at α = 0: there are compressive, frictionally
@@ -619,7 +622,7 @@ def stands(assembly: Assembly, *, friction: float = math.inf, g: float = 9.81) -
     return _static(_system(assembly, 1, g), mu, 0.0)[0] == 0
 
 
-def minimum_stable(build: Callable[[float], Assembly], lo: float, hi: float, *,
+def minimum_stable(build: Callable[[float], Geometry], lo: float, hi: float, *,
                    friction: float = math.inf, xtol: float = 1e-7) -> float:
     """Smallest parameter for which ``build(parameter)`` stands under its own weight.
 
@@ -630,7 +633,7 @@ def minimum_stable(build: Callable[[float], Assembly], lo: float, hi: float, *,
     Parameters
     ----------
     build : callable
-        Parameter → Assembly.
+        Parameter → Geometry.
     lo, hi : float
         Bracket: ``build(lo)`` must not stand and ``build(hi)`` must.
     friction : float

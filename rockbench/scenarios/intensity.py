@@ -46,8 +46,8 @@ from dataclasses import dataclass
 from enum import Enum
 
 from rockbench.errors import ScenarioError
+from rockbench.geometry import RockingProperties
 from rockbench.scenarios.excitation import CosinePulse, Excitation, Record, SinePulse
-from rockbench.scenarios.model import RockingProperties
 
 __all__ = ["IntensityMeasure", "PulseRatios", "peak_ground_acceleration",
            "peak_ground_velocity", "intensity", "scale_factor", "scale_record", "pulse_ratios"]
