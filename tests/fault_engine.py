@@ -23,7 +23,7 @@ from typing import ClassVar
 import numpy as np
 
 from rockbench import analytic
-from rockbench.engines import Capabilities, Engine, EngineSettings
+from rockbench.engines import Capabilities, Engine, EngineSettings, KnobRole
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Trajectory
 
@@ -99,6 +99,8 @@ class FaultEngine(Engine):
     presets: ClassVar[dict[str, dict[str, object]]] = {
         "accurate": {}, "fast": {"timestep": 2e-3},
     }
+    knob_roles: ClassVar[dict[str, KnobRole]] = {"timestep": KnobRole.TIME_STEP,
+                                                 "iterations": KnobRole.ITERATIONS}
 
     @classmethod
     def version(cls) -> str:
@@ -108,10 +110,10 @@ class FaultEngine(Engine):
         assert isinstance(settings, FaultSettings)
         self.s = settings
         self.t = 0.0
-        c, th = scenario.initial_poses()
+        p0 = scenario.initial_poses()
         self.pose = np.zeros((scenario.n_blocks, 7))
-        self.pose[:, 0], self.pose[:, 2] = c[:, 0], c[:, 1]
-        self.pose[:, 3], self.pose[:, 5] = math.cos(th / 2), math.sin(th / 2)
+        self.pose[:, 0], self.pose[:, 2] = p0[:, 0], p0[:, 1]
+        self.pose[:, 3], self.pose[:, 5] = np.cos(p0[:, 2] / 2), np.sin(p0[:, 2] / 2)
         self.scenario = scenario
         self.dt = float(settings.timestep)
         self.ref = None
@@ -165,9 +167,9 @@ class FaultEngine(Engine):
             # the bottom block rocks on its pivots without sliding; the others ride on it
             b, sc = self.scenario.blocks[0], self.scenario
             s, t0 = np.sign(th[0]), th[0]
-            u = float(sc.excitation.displacement(self.t))
+            u = float(self.drive.displacement(self.t)[0])
             px = u + s * b.pivot_half_width
-            c = sc.stack.centroids
+            c = sc.geometry.centroids
             dx, dz = c[:, 0] - s * b.pivot_half_width, c[:, 1]
             self.pose[:, 0] = px + dx * np.cos(t0) + dz * np.sin(t0)
             self.pose[:, 2] = -dx * np.sin(t0) + dz * np.cos(t0)

@@ -5,7 +5,7 @@ import pytest
 
 from rockbench.analytic import quarter_period
 from rockbench.engines import get_engine
-from rockbench.scenarios import Block, Scenario, Stack, get_scenario
+from rockbench.scenarios import Block, Scenario, get_scenario, stack
 from rockbench.trajectory import Status
 
 
@@ -24,9 +24,9 @@ def test_exact_and_linearised_first_impact_match_closed_forms():
 
 def test_unsupported_cases_are_statuses():
     b = Block(0.5, 0.2, 1.0, mass=1.0)
-    three = Scenario("three", Stack((b, b, b)), duration=0.1)
+    three = Scenario("three", stack((b, b, b)), duration=0.1)
     assert get_engine("analytic").simulate(three).status is Status.UNSUPPORTED
-    two = Scenario("two", Stack((b, b)), duration=0.1)
+    two = Scenario("two", stack((b, b)), duration=0.1)
     traj = get_engine("analytic").simulate(two, {"linear": True})
     assert traj.status is Status.UNSUPPORTED and "single blocks" in traj.message
     assert np.all(get_engine("analytic").simulate(two).theta == 0.0)

@@ -21,8 +21,10 @@ from rockbench.engines import (
     unregister,
 )
 from rockbench.engines.base import _Watchdog
+from rockbench.engines.drive import BaseDrive
 from rockbench.errors import EngineUnavailable, UnknownEngine
-from rockbench.scenarios import Block, Scenario, SinePulse, Stack
+from rockbench.geometry import Geometry, Support, stack
+from rockbench.scenarios import Block, Scenario, SinePulse
 from rockbench.trajectory import Status
 
 
@@ -52,7 +54,8 @@ class CarryEngine(Engine):
 
     def _build(self, scenario, settings):
         self.sc, self.s = scenario, settings
-        self.c0, self.th0 = scenario.initial_poses()
+        p0 = scenario.initial_poses()
+        self.c0, self.th0 = p0[:, :2], p0[:, 2]
         self.t = 0.0
         self.u = 0.0
         self.drives: list[float] = []
@@ -62,7 +65,7 @@ class CarryEngine(Engine):
 
     def _drive_base(self, t, dt):
         self.drives.append(t)
-        self.u = float(self.sc.excitation.displacement(t + dt))
+        self.u = float(self.drive.displacement(t + dt)[0])
 
     def _fix_base(self):
         self.fixed = True
@@ -75,8 +78,8 @@ class CarryEngine(Engine):
         th = self.th0 + self.s.spin * self.t
         self.out[:, 0] = self.c0[:, 0] + self.u
         self.out[:, 2] = self.c0[:, 1]
-        self.out[:, 3] = math.cos(th / 2)
-        self.out[:, 5] = math.sin(th / 2)
+        self.out[:, 3] = np.cos(th / 2)
+        self.out[:, 5] = np.sin(th / 2)
         if self.t >= self.s.poison_at:
             self.out[0, 0] = np.nan
         if self.t >= self.s.fly_at:
@@ -155,17 +158,19 @@ def test_watchdog_cuts_at_the_first_bad_sample_across_chunks(carry, at):
 def test_watchdog_sees_nan_in_every_pose_component():
     # y and the wobble components enter no physical bound; NaN there is still caught
     sc = Scenario("f", B, initial_tilt=0.5, duration=1.0, output_rate=100.0)
-    c, th = sc.initial_poses()
+    p0 = sc.initial_poses()
+    c, th = p0[:, :2], float(p0[0, 2])
     poses = np.zeros((11, 1, 7))
     poses[:, 0, 0], poses[:, 0, 2] = c[0, 0], c[0, 1]
     poses[:, 0, 3], poses[:, 0, 5] = math.cos(th / 2), math.sin(th / 2)
     t = np.arange(1, 11) / 100.0
-    assert _Watchdog(sc).check(poses, t) is None
+    drive = BaseDrive(sc.motion, sc.duration)
+    assert _Watchdog(sc, drive).check(poses, t) is None
     for col in range(7):
         bad = poses.copy()
         bad[4, 0, col] = np.nan
         with np.errstate(invalid="ignore"):
-            j, (status, msg) = _Watchdog(sc).check(bad, t)
+            j, (status, msg) = _Watchdog(sc, drive).check(bad, t)
         assert (j, status) == (3, Status.UNSTABLE) and "NaN" in msg, col
 
 
@@ -182,7 +187,7 @@ def test_an_engine_that_cannot_hold_the_base_keeps_driving_it(carry):
 
 
 def test_unsupported_is_a_status(carry):
-    three = Scenario("s", Stack((B, B, B)), duration=0.1)
+    three = Scenario("s", stack((B, B, B)), duration=0.1)
     traj = carry.simulate(three)
     assert traj.status is Status.UNSUPPORTED and "at most 2" in traj.message
     chamfered = Scenario("c", Block(0.5, 0.2, 1.0, mass=1.0, chamfer=0.01), duration=0.1)
@@ -194,8 +199,10 @@ def test_settings_presets_and_overrides(carry):
     s = carry.settings(None, timestep="0.002", spin="1")
     assert s.timestep == 0.002 and s.spin == 1.0
     assert s.digest() != carry.settings().digest()
-    with pytest.raises(SettingsError, match="no knob 'dt'"):
+    # user-facing: the engine's name and its knobs, no class names
+    with pytest.raises(SettingsError, match="^engine 'carry' has no knob 'dt'; knobs: ") as bad:
         carry.settings(None, dt=1)
+    assert "spin" in str(bad.value) and "Settings" not in str(bad.value)
     with pytest.raises(SettingsError, match="no preset"):
         carry.settings("slow")
     with pytest.raises(SettingsError, match="must be a number"):
@@ -247,18 +254,17 @@ def _poses(xz_theta: list[tuple[float, float, float]]) -> np.ndarray:
 
 
 def test_the_watchdog_stops_a_run_where_unmodelled_bodies_overlap() -> None:
-    from rockbench.scenarios.assembly import Assembly, Support
-
     # two blocks 1 cm apart beside a support; pairs named unmodelled: block 1 and block 2,
     # block 2 and the support (body 2), block 1 and the base (body 3)
-    scene = Assembly((Block(0.2, 0.2, 0.8, mass=1.0), Block(0.4, 0.2, 0.4, mass=1.0)),
+    scene = Geometry((Block(0.2, 0.2, 0.8, mass=1.0), Block(0.4, 0.2, 0.4, mass=1.0)),
                      ((-0.11, 0.4, 0.0), (0.21, 0.2, 0.0)),
                      (Support.rectangle(0.42, 0.6, 0.0, 0.3),))
     # a base that barely moves (no energy check) and samples far apart (no speed bound)
     sc = Scenario("gap", scene, excitation=SinePulse(2.0, 1e-9), duration=1.0,
                   output_rate=10.0)
     rest = _poses([(-0.11, 0.4, 0.0), (0.21, 0.2, 0.0)])
-    watch = _Watchdog(sc, ((0, 1), (1, 2), (0, 3)))
+    drive = BaseDrive(sc.motion, sc.duration)
+    watch = _Watchdog(sc, drive, ((0, 1), (1, 2), (0, 3)))
     chunk = np.repeat(rest[None], 5, axis=0)
     assert watch.check(chunk, np.arange(1, 5) * 0.1) is None
     # block 1 turned by 0.1 rad about its lower right corner reaches 2.1 cm into block 2
@@ -276,4 +282,4 @@ def test_the_watchdog_stops_a_run_where_unmodelled_bodies_overlap() -> None:
         found = watch.check(chunk, np.arange(1, 5) * 0.1)
         assert found is not None and f"{what} overlap by 0.01 m" in found[1][1], found
     # pairs the engine models are not watched
-    assert _Watchdog(sc).check(chunk, np.arange(1, 5) * 0.1) is None
+    assert _Watchdog(sc, drive).check(chunk, np.arange(1, 5) * 0.1) is None

@@ -20,25 +20,29 @@ from engine_helpers import (
     check_slides_like_coulomb,
     check_stack_follows_two_block,
     check_tilting_table,
+    lam,
 )
 
-from rockbench.analytic import reference, slip_of
+from rockbench.analytic import critical_angle, reference, slip_of
 from rockbench.analytic.housner import single_block_reference
 from rockbench.engines import SettingsError, blender_engine
 from rockbench.engines.blender_engine import BLENDER_DEFAULTS, BlenderEngine, BlenderSettings
+from rockbench.engines.drive import BaseDrive
 from rockbench.engines.testing import B2
 from rockbench.errors import EngineUnavailable
+from rockbench.geometry import Geometry, Support
 from rockbench.metrics import impact_times
 from rockbench.scenarios import (
     Block,
     Contact,
     Scenario,
     SinePulse,
+    Sinusoid,
     TiltTable,
+    catalog,
     get_scenario,
     get_suite,
 )
-from rockbench.scenarios.assembly import Assembly, Support
 from rockbench.trajectory import Status
 
 needs_bpy = pytest.mark.skipif(importlib.util.find_spec("bpy") is None,
@@ -105,6 +109,7 @@ def test_blender_defaults_are_not_zero_and_all_are_overwritten(engine: BlenderEn
     sc = sc.replace(contact=Contact(friction=0.64, restitution=0.09))
     s = engine.settings(fps=480.0, substeps_per_frame=7, solver_iterations=33,
                         use_split_impulse=False, collision_margin=2e-4)
+    engine.drive = BaseDrive(sc.motion, sc.duration)  # what simulate sets before _build
     frame = engine._build(sc, s)
     try:
         scene = bpy.context.scene
@@ -143,6 +148,7 @@ def test_time_step_is_frame_over_substeps(engine: BlenderEngine, fps: float,
     # g T² (N + 1) / (2N): measure N (the paper's rule 1/((n_s + 1)·fps) would give n_s + 1)
     # (output at the frame rate: one Blender frame of n_s sub-steps per knob frame)
     sc = Scenario("fall", Block(0.5, 0.2, 1.0, mass=1.0), duration=1.0, output_rate=fps)
+    engine.drive = BaseDrive(sc.motion, sc.duration)  # what simulate sets before _build
     frame = engine._build(sc, engine.settings(fps=fps, substeps_per_frame=substeps))
     try:
         ob = engine._blocks[0]
@@ -167,7 +173,7 @@ def test_free_rocking_b0_accurate(engine: BlenderEngine) -> None:
     # impacts within 0.01 %, max |θ − θ_ref| 0.0004 λ over 3.6 s (free in 3D: 0.26 % and
     # 0.011 λ, the pivot creep; see the module docstring)
     np.testing.assert_allclose(impact_times(tr)[:3], impact_times(ref)[:3], rtol=5e-4)
-    err = np.max(np.abs(tr.theta[:, 0] - ref.theta[:, 0])) / sc.critical_angle
+    err = np.max(np.abs(tr.theta[:, 0] - ref.theta[:, 0])) / lam(sc)
     assert err <= 2e-3
     # the block never rocks higher than it started (no energy gain)
     assert np.max(np.abs(tr.theta[:, 0])) <= sc.theta0 * (1 + 1e-4)
@@ -267,7 +273,7 @@ def test_paper_preset_pulse_peak(engine: BlenderEngine) -> None:
 
 @needs_bpy
 def test_mesh_shape_single_block_only(engine: BlenderEngine) -> None:
-    stack = get_scenario("stack-pulse-4.0hz-4mm").stack
+    stack = get_scenario("stack-pulse-4.0hz-4mm").geometry
     tr = engine.simulate(Scenario("rest", stack, duration=0.1), {"collision_shape": "mesh"})
     assert tr.status is Status.UNSUPPORTED and "mesh" in tr.message
     tr = engine.simulate(Scenario("rest", SINGLE2, duration=0.5), {"collision_shape": "mesh"})
@@ -343,24 +349,26 @@ def test_prisms_are_unsupported_with_the_reason(engine: BlenderEngine) -> None:
 def test_supports_move_with_the_base(engine: BlenderEngine) -> None:
     # a block on a support beside one on the base, under a 2 Hz pulse at half the
     # scene's collapse acceleration: both ride, ending displaced by the base's 2πA
-    scene = Assembly((Block(0.4, 0.3, 0.6, density=2000.0),
+    scene = Geometry((Block(0.4, 0.3, 0.6, density=2000.0),
                       Block(0.3, 0.3, 0.9, density=2000.0)),
                      ((-0.3, 0.6, 0.0), (0.25, 0.45, 0.0)),
                      (Support.rectangle(-0.5, -0.1, 0.0, 0.3),))
     f = 2.0
-    amp = 0.5 * 9.81 * math.tan(scene.critical_angle()) / (2 * math.pi * f) ** 2
+    amp = 0.5 * 9.81 * math.tan(critical_angle(scene)) / (2 * math.pi * f) ** 2
     sc = Scenario("on-a-support", scene, excitation=SinePulse(f, amp), duration=1.0)
     tr = engine.simulate(sc)
     assert tr.status is Status.OK, tr.message
     np.testing.assert_allclose(tr.x[-1] - tr.x[0], 2 * math.pi * amp, rtol=1e-3)
-    assert np.max(np.abs(tr.theta - tr.theta[0])) < 1e-3 * sc.critical_angle
+    assert np.max(np.abs(tr.theta - tr.theta[0])) < 1e-3 * lam(sc)
 
 
 @needs_bpy
 def test_interface_friction_applies_to_each_pair(engine: BlenderEngine) -> None:
     # μ 0.25 on the base, 0.05 between the blocks: the upper block slides on the lower
-    # like the exact Coulomb solution (measured 0.29 % / 0.14 % of its peak slip; each
-    # body had √μ before, the interface 0.25, and the upper block rocked to 0.12 λ)
+    # like the exact Coulomb solution (measured 0.26 % / 0.55 % of its peak slip with the
+    # column's frictions 0.25 · (1, 0.05); 0.29 % / 0.14 % with √0.05 on both blocks and
+    # 0.25 / √0.05 on the base; each body had √μ before, the interface 0.25, and the upper
+    # block rocked to 0.12 λ)
     sc = get_scenario("slide-stack-pulse-5.0hz-3mm-mu0.25-if0.05")
     ref = reference(sc)
     tr = engine.simulate(sc)
@@ -369,7 +377,7 @@ def test_interface_friction_applies_to_each_pair(engine: BlenderEngine) -> None:
     for block in (0, 1):
         error = np.max(np.abs(slip_of(tr, sc, block) - slip_of(ref, sc, block))) / peak
         assert error <= 0.01, f"block {block + 1}: slip error {error:.2%}"
-    assert np.max(np.abs(tr.theta)) <= 0.01 * sc.critical_angle
+    assert np.max(np.abs(tr.theta)) <= 0.01 * lam(sc)
     none = sc.replace(contact=Contact(friction=0.5, interface_friction=0.0), duration=0.1)
     tr = engine.simulate(none)
     assert tr.status is Status.UNSUPPORTED and "multiplies" in tr.message
@@ -385,14 +393,29 @@ def test_tilting_table_is_the_base_frame(engine: BlenderEngine) -> None:
     ref = reference(sc)
     tr = engine.simulate(sc)
     assert tr.status is Status.OK, tr.message
-    lam = sc.critical_angle
+    lam_ = lam(sc)
     alpha = sc.excitation.load_factor(tr.t)
     still = alpha < 0.5
     np.testing.assert_allclose(tr.x[still, 0] - tr.x[0, 0], sc.excitation.displacement(tr.t[still]),
                                atol=1e-8)
-    assert np.max(np.abs(tr.theta[still])) < 1e-5 * lam
-    assert np.max(np.abs(tr.theta[:, 0] - ref.theta[:, 0])) < 2e-4 * lam
-    assert tr.theta[-1, 0] > 0.05 * lam  # it has lifted toward +x
+    assert np.max(np.abs(tr.theta[still])) < 1e-5 * lam_
+    assert np.max(np.abs(tr.theta[:, 0] - ref.theta[:, 0])) < 2e-4 * lam_
+    assert tr.theta[-1, 0] > 0.05 * lam_  # it has lifted toward +x
+
+
+def test_only_a_tilting_table_runs_in_the_base_frame() -> None:
+    # the plugin never reads the excitation: a base whose travel has no bound is run in its
+    # own frame, which of every catalog motion (and a never-ending sinusoid, and tilting
+    # tables with any delay, direction or run length) picks exactly the tilting tables
+    cases = [get_scenario(n) for n in catalog()]
+    cases += [cases[0].replace(excitation=exc, duration=d) for exc, d in (
+        (Sinusoid(2.0, 0.01), 30.0), (TiltTable(0.2, -1, delay=0.5), 0.1),
+        (TiltTable(0.025, 1), 40.0), (TiltTable(1e-6, 1, delay=2.0), 1.0))]
+    picked = {sc.name + repr(sc.excitation): blender_engine._runs_away(
+        BaseDrive(sc.motion, sc.duration)) for sc in cases}
+    assert picked == {sc.name + repr(sc.excitation): isinstance(sc.excitation, TiltTable)
+                      for sc in cases}
+    assert sum(picked.values()) == 3
 
 
 # Tilting table at 0.05 /s and 0.025 /s (accurate preset), measured: parapet onsets

@@ -22,6 +22,7 @@ from engine_helpers import (  # noqa: E402
     check_stack_follows_two_block,
     check_tilting_table,
     inclined_scene,
+    lam,
     max_error,
 )
 
@@ -31,6 +32,7 @@ from rockbench.engines.drake_engine import (  # noqa: E402
     DrakeSettings,
     assembly_harmonic_frictions,
     corner_centres,
+    harmonic_frictions,
     prism_obj,
 )
 from rockbench.scenarios import Contact, Scenario, SinePulse, get_scenario  # noqa: E402
@@ -97,8 +99,8 @@ def test_stack_at_rest_stays_at_rest() -> None:
     tr = DrakeEngine().simulate(sc, "accurate")
     assert tr.status == Status.OK
     # the contact points per pair of slices chatter between corners: a tiny tremor
-    assert np.max(np.abs(tr.theta)) < 1e-3 * sc.critical_angle
-    c0 = sc.stack.centroids
+    assert np.max(np.abs(tr.theta)) < 1e-3 * lam(sc)
+    c0 = sc.geometry.centroids
     assert np.max(np.abs(tr.x[-1] - c0[:, 0])) < 1e-5
     # SAP near-rigid regularisation: ~0.2 mm sink per interface, no drift
     assert np.max(np.abs(tr.z[-1] - c0[:, 1])) < 1e-3
@@ -118,7 +120,7 @@ def test_stack_follows_the_two_block_solution(case: str, tol: float) -> None:
 
 
 def test_prism_obj_is_the_extruded_profile() -> None:
-    blk = PAPER_STACK.blocks[0]
+    blk = PAPER_STACK.bodies[0]
     text = prism_obj(blk.profile(), blk.depth)
     verts = np.array([[float(v) for v in ln.split()[1:]] for ln in text.splitlines()
                       if ln.startswith("v ")])
@@ -208,7 +210,7 @@ def test_corner_centres_touch_both_edges() -> None:
     np.testing.assert_allclose(corner_centres(blk.profile(), r),
                                blk.profile() - np.sign(blk.profile()) * r, atol=1e-15)
     # a chamfered octagon: every centre is r from both edges at its vertex
-    prof = PAPER_STACK.blocks[0].profile()
+    prof = PAPER_STACK.bodies[0].profile()
     c = corner_centres(prof, r)
     for i in range(len(prof)):
         for j in (i - 1, (i + 1) % len(prof)):
@@ -289,13 +291,34 @@ def test_assembly_frictions_combine_to_the_scenario_values() -> None:
 
 
 def test_interface_friction_at_most_half_the_base_one_is_unsupported() -> None:
-    sc = get_scenario("parapet-offset0.25").replace(duration=0.1)
+    # a geometry other than a column (the arch: voussoirs on each other and on supports)
+    sc = get_scenario("arch-9v-t0.20").replace(duration=0.1)
+    assert sc.geometry.column is None
     tr = DrakeEngine().simulate(sc.replace(contact=Contact(friction=1.0,
                                                            interface_friction=0.5)))
     assert tr.status is Status.UNSUPPORTED and "harmonically" in tr.message
     ok = DrakeEngine().simulate(sc.replace(contact=Contact(friction=1.0,
                                                            interface_friction=0.6)))
     assert ok.status is Status.OK, ok.message
+    # a column (the parapet on its wall) alternates its blocks' coefficients: any ratio
+    col = get_scenario("parapet-offset0.25").replace(duration=0.1)
+    assert col.geometry.column is not None
+    tr = DrakeEngine().simulate(col.replace(contact=Contact(friction=1.0,
+                                                            interface_friction=0.5)))
+    assert tr.status is Status.OK, tr.message
+
+
+def test_column_frictions_combine_to_the_scenario_values() -> None:
+    def pair(a: float, b: float) -> float:  # Drake's harmonic combination
+        return 2.0 * a * b / (a + b) if a + b > 0 else 0.0
+
+    for mu, mu_if in ((0.8, 0.5), (0.5, 0.8), (0.6, 0.2), (0.0, 0.4), (0.4, 0.0),
+                      (0.7, 0.7)):
+        base, *blocks = harmonic_frictions(mu, mu_if, 4)
+        assert all(f >= 0.0 for f in (base, *blocks))
+        assert pair(base, blocks[0]) == pytest.approx(mu, rel=1e-12)
+        for a, b in zip(blocks[:-1], blocks[1:], strict=True):
+            assert pair(a, b) == pytest.approx(mu_if, rel=1e-12)
 
 
 # measured (0.5 s, accurate): column 0 λ / 3.2e-6 m (1.1 s CPU), parapet 1e-7 λ / 1.4e-8 m

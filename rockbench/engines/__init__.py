@@ -12,10 +12,15 @@ from rockbench.engines.registry import (
     resolve_engine_names,
     unregister,
 )
-from rockbench.engines.settings import EngineSettings, SettingsError, parse_set_options
+from rockbench.engines.settings import (
+    EngineSettings,
+    KnobRole,
+    SettingsError,
+    parse_set_options,
+)
 
 __all__ = [
-    "Engine", "Capabilities", "EngineSettings", "SettingsError", "EngineInfo",
+    "Engine", "Capabilities", "EngineSettings", "KnobRole", "SettingsError", "EngineInfo",
     "angles_from_quaternions", "engine_class", "engine_info", "get_engine", "list_engines",
     "probe", "register", "unregister", "resolve_engine_names", "parse_set_options",
 ]

@@ -13,8 +13,7 @@ from typing import ClassVar
 
 import numpy as np
 
-import rockbench
-from rockbench import analytic
+from rockbench import analytic, provenance
 from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.settings import EngineSettings
 from rockbench.errors import UnsupportedScenario
@@ -42,24 +41,24 @@ class AnalyticEngine(Engine):
 
     name: ClassVar[str] = "analytic"
     capabilities: ClassVar[Capabilities] = Capabilities(
-        dimensions=2, max_blocks=2, analytic=True,
+        dimensions=2, max_blocks=2, analytic=True, base_axes="xz",
         no_assemblies="no dynamic closed form exists; an assembly's reference is its "
                       "limit-analysis collapse factor (rockbench collapse)")
     Settings: ClassVar[type[EngineSettings]] = AnalyticSettings
     presets: ClassVar[dict] = {"accurate": {}, "fast": {}, "linear": {"linear": True}}
+    contact_model: ClassVar[str] = "analytic"
     # rockbench's own code on its core dependencies (NumPy, SciPy): nothing to install
     requires: ClassVar[tuple[str, ...]] = ()
     extra: ClassVar[str] = ""
 
     @classmethod
     def version(cls) -> str:
-        return rockbench.__version__
+        return provenance.code_version("reference")
 
     def _check_supported(self, scenario: Scenario) -> None:
-        if not analytic.has_reference(scenario):
-            raise UnsupportedScenario(
-                "analytic references exist for one block or two centred stacked blocks only"
-            )
+        why = analytic.coverage(scenario)
+        if why:
+            raise UnsupportedScenario(why)
 
     def _run(self, scenario: Scenario, settings: EngineSettings, meta: dict) -> Trajectory:
         traj = analytic.reference(scenario, linear=settings.linear)  # type: ignore[attr-defined]

@@ -5,8 +5,12 @@ Contract for implementers (the numbered rules that every plugin follows)
 1. Subclass :class:`Engine`; set the class attributes ``name`` (the flag used on
    the command line), ``capabilities`` (:class:`Capabilities`), ``Settings`` (a
    frozen :class:`~rockbench.engines.settings.EngineSettings` dataclass whose
-   defaults are calibrated) and ``presets`` (at least ``"accurate"`` and
-   ``"fast"``, each a mapping of knob overrides, possibly empty).
+   defaults are calibrated), ``presets`` (at least ``"accurate"`` and
+   ``"fast"``, each a mapping of knob overrides, possibly empty),
+   ``knob_roles`` (what each knob does:
+   :class:`~rockbench.engines.settings.KnobRole`, at least the time step) and,
+   if not ``accurate``, ``assembly_preset`` (the preset the assembly studies
+   run).
 2. Declare ``requires`` (import names of the libraries the engine cannot run
    without) and ``extra`` (the rockbench extra that installs them; a
    third-party plugin leaves it empty and the hint names the library). Never
@@ -29,20 +33,26 @@ Contract for implementers (the numbered rules that every plugin follows)
    (check name -> measured reason): the test suites, yours through
    :func:`rockbench.engines.testing.parametrize_with_checks`, mark them as
    strict expected failures.
-3. Implement :meth:`_build`: create the minimal scene for the scenario: one
-   collision shape per block (box, or convex prism if chamfered), a ground/base
-   body whose top face is the plane z = 0, friction and restitution from
-   ``scenario.contact``, no hidden damping, no sleeping. Place block ``i``'s
-   centroid at ``scenario.initial_poses()`` (rotation θ0 about +y), at rest.
+3. Implement :meth:`_build`: create the minimal scene for ``scenario.geometry``
+   (:mod:`rockbench.geometry`): one collision shape per body (box, or convex
+   prism if chamfered or polygonal), the fixed supports, a ground/base body whose
+   top face is the plane z = 0, friction and restitution from
+   ``scenario.contact``, no hidden damping, no sleeping. Place body ``i``'s
+   centre of gravity and angle at ``scenario.initial_poses()[i]``, at rest.
    Return the physics time step actually used.
-4. Implement :meth:`_drive_base`: before a step starting at time ``t``, impose
-   the base motion from ``scenario.excitation`` (velocity and/or displacement,
+4. Apply the base motion: :attr:`drive` (a :class:`~rockbench.engines.drive.BaseDrive`,
+   set before :meth:`_build`) samples the scenario's three-component motion on
+   the engine's step grid; the engine applies it (velocity and/or displacement,
    not tilted gravity; the one exception is an engine whose number format cannot
-   follow a base that travels far and fast, which may run a tilting table, a
-   uniform base acceleration, in the base's frame and add u_g to the poses it
-   reads: Blender, see ``blender_engine``). It is called before every step while the base moves,
-   by :meth:`_advance_driven`, which an engine may override to take many driven
-   steps in one call (e.g. a compiled loop over precomputed base velocities).
+   follow a base that travels far and fast, which may run a uniformly
+   accelerating base in the base's frame and add u_g to the poses it reads:
+   Blender, see ``blender_engine``) and never reads the excitation itself.
+   Declare the axes it applies in ``Capabilities.base_axes``: a motion along any
+   other axis is ``unsupported``. :meth:`_drive_base` imposes the motion for
+   the step starting at time ``t``; it is called before every step while the
+   base moves, by :meth:`_advance_driven`, which an engine may override to take
+   many driven steps in one call (e.g. a compiled loop over precomputed base
+   velocities).
 5. Optionally implement :meth:`_fix_base` (called once when the excitation has
    ended): make the base still and return True so that steps can be batched.
 6. Implement :meth:`_advance`: take ``n`` physics steps. Optionally override
@@ -78,11 +88,13 @@ from typing import Any, ClassVar
 import numpy as np
 
 from rockbench.bounds import SpeedBound
+from rockbench.engines.drive import BaseDrive
 from rockbench.engines.overlap import OverlapWatch
-from rockbench.engines.settings import EngineSettings, SettingsError
+from rockbench.engines.settings import EngineSettings, KnobRole, SettingsError
 from rockbench.errors import EngineUnavailable, UnsupportedScenario
+from rockbench.geometry import Block
 from rockbench.limits import check_memory
-from rockbench.scenarios import Block, Scenario
+from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = ["Engine", "Capabilities", "angles_from_quaternions", "install_hint",
@@ -134,9 +146,10 @@ class Capabilities:
     analytic : bool
         True for reference solutions (not physics engines).
     assemblies : bool
-        Whether it builds :class:`~rockbench.scenarios.assembly.Assembly` scenes
-        (blocks at any pose, convex prisms, fixed supports); others return
-        ``unsupported`` for them.
+        Whether it builds any :class:`~rockbench.geometry.Geometry` (bodies at
+        any pose, convex prisms, fixed supports); without it only columns
+        (:attr:`~rockbench.geometry.Geometry.column`) are built and others are
+        ``unsupported``.
     no_assemblies : str
         Why not, when ``assemblies`` is False (the unsupported status says it).
     prisms : bool
@@ -144,6 +157,8 @@ class Capabilities:
         (:class:`~rockbench.scenarios.assembly.Prism`) besides rectangular blocks.
     no_prisms : str
         Why not, when ``prisms`` is False (the unsupported status says it).
+    base_axes : str
+        The axes of the base motion it applies (``"x"``, ``"xz"``, ``"xyz"``).
     """
 
     dimensions: int = 3
@@ -154,6 +169,7 @@ class Capabilities:
     no_assemblies: str = "only single blocks and stacks are built"
     prisms: bool = True
     no_prisms: str = ""
+    base_axes: str = "x"
 
 
 def angles_from_quaternions(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -193,6 +209,18 @@ class Engine(ABC):
     fresh_process: ClassVar[bool] = False
     #: The preset the sensitivity study (the paper's Table 2) varies the knobs from.
     sensitivity_preset: ClassVar[str] = "accurate"
+    #: The preset the assembly studies (tilting table, pulse to collapse) run by default.
+    assembly_preset: ClassVar[str] = "accurate"
+    #: What each knob does (knob → role): studies ask the engine instead of guessing
+    #: from names. A role appears at most once.
+    knob_roles: ClassVar[Mapping[str, KnobRole]] = {}
+    #: The knob a convergence ladder refines (by its role's :meth:`KnobRole.refine`):
+    #: the time step, or the knob that sets it; '' for the knob of the time-step role.
+    refinement: ClassVar[str] = ""
+    #: The family of its contact model (independent families make a consensus):
+    #: ``soft-constraint``, ``impulse``, ``compliant-point``, ``penalty``,
+    #: ``non-smooth``, ``analytic``.
+    contact_model: ClassVar[str] = ""
 
     # ------------------------------------------------------------------ public API
     @classmethod
@@ -238,7 +266,37 @@ class Engine(ABC):
             text = str(exc)
             if text.split(" ", 1)[0] in overrides:  # a knob's value: name its engine too
                 raise SettingsError(f"{cls.name}.{text}") from None
+            if text.startswith("no knob"):
+                raise SettingsError(f"engine {cls.name!r} has {text}") from None
             raise
+
+    @classmethod
+    def knob(cls, role: KnobRole) -> str | None:
+        """The knob that plays ``role`` (None if the engine has none)."""
+        return next((k for k, r in cls.knob_roles.items() if r is role), None)
+
+    @classmethod
+    def refined(cls, settings: Mapping[str, Any], level: int) -> dict[str, Any]:
+        """``settings`` (a preset and overrides) one convergence-ladder rung ``level`` finer.
+
+        The :attr:`refinement` knob (default: the time step's) is refined ``level``
+        times by a factor of 2 (:meth:`KnobRole.refine`); level 0 is ``settings``.
+
+        Raises
+        ------
+        SettingsError
+            The engine declares no knob to refine, or its value is not a number.
+        """
+        knob = cls.refinement or cls.knob(KnobRole.TIME_STEP)
+        if knob is None or knob not in cls.knob_roles:
+            raise SettingsError(f"engine {cls.name!r} declares no knob a convergence ladder "
+                                "refines (knob_roles, refinement)")
+        value = getattr(cls.resolve_settings(dict(settings)), knob)
+        try:
+            refined = cls.knob_roles[knob].refine(value, level)
+        except ValueError as exc:
+            raise SettingsError(f"engine {cls.name!r}: {knob} {exc}") from None
+        return {**settings, knob: refined}
 
     @classmethod
     def resolve_settings(cls, settings: Any = None) -> EngineSettings:
@@ -263,13 +321,17 @@ class Engine(ABC):
                 f"{self.name} models at most {cap.max_blocks} block(s), scenario has "
                 f"{scenario.n_blocks}"
             )
-        if scenario.is_assembly and not cap.assemblies:
+        if scenario.geometry.column is None and not cap.assemblies:
             raise UnsupportedScenario(
-                f"{self.name} does not build block assemblies: {cap.no_assemblies}")
-        if scenario.is_assembly and not cap.prisms \
-                and not all(isinstance(b, Block) for b in scenario.blocks):
+                f"{self.name} builds only blocks standing on each other: {cap.no_assemblies}")
+        if not cap.prisms and not all(isinstance(b, Block) for b in scenario.blocks):
             raise UnsupportedScenario(
-                f"{self.name} builds assemblies of rectangular blocks only: {cap.no_prisms}")
+                f"{self.name} builds rectangular blocks only: {cap.no_prisms}")
+        other = tuple(a for a in scenario.motion.axes if a not in cap.base_axes)
+        if other:
+            raise UnsupportedScenario(
+                f"{self.name} applies the base motion along {', '.join(cap.base_axes)} only; "
+                f"this scenario's base also moves along {', '.join(other)}")
         if not cap.chamfer and any(b.chamfer > 0 for b in scenario.blocks):
             raise UnsupportedScenario(f"{self.name} does not model chamfered blocks")
         self._check_supported(scenario)
@@ -285,6 +347,7 @@ class Engine(ABC):
         """
         s = self.resolve_settings(settings)
         check_memory(scenario)
+        self.drive = BaseDrive(scenario.motion, scenario.duration)
         meta = dict(engine=self.name, engine_version=self.version(), settings=s.to_dict(),
                     scenario=scenario.name)
         try:
@@ -322,14 +385,13 @@ class Engine(ABC):
         # when the step divides the output interval, sample right after whole
         # steps; otherwise read every step and interpolate onto the output times
         aligned = k >= 1 and abs(ratio - k) <= 1e-6 * ratio
-        exc = scenario.excitation
-        watch = _Watchdog(scenario, self.unmodelled_pairs(scenario) if scenario.is_assembly
-                          else ())
+        drive = self.drive
+        watch = _Watchdog(scenario, drive, self.unmodelled_pairs(scenario))
         poses = np.full((n_out, nb, 7), np.nan)
         poses[0] = self._read_poses()
         sampler = self._sample_aligned if aligned else self._sample_interpolated
         with np.errstate(invalid="ignore", over="ignore"):
-            last, verdict = sampler(poses, t_out, dt, k, exc, watch)
+            last, verdict = sampler(poses, t_out, dt, k, drive, watch)
         status, message = verdict if verdict is not None else (Status.OK, "")
         meta["settings"] = {**meta["settings"], "effective_timestep": dt,
                             "steps_per_sample": ratio}
@@ -339,13 +401,14 @@ class Engine(ABC):
                           status=status, message=message, **meta)
 
     def _sample_aligned(self, poses: np.ndarray, t_out: np.ndarray, dt: float, k: int,
-                        exc: Any, watch: _Watchdog) -> tuple[int, tuple[Status, str] | None]:
+                        drive: BaseDrive, watch: _Watchdog
+                        ) -> tuple[int, tuple[Status, str] | None]:
         """Advance k steps per output sample, a watchdog chunk of samples per hook call."""
         n_out = t_out.size
-        batched = exc.is_free
-        # the base is driven up to the first sample that ends past the excitation,
-        # then the engine holds it still (n_out: the excitation outlasts the run)
-        ends_past = (np.arange(1, n_out) * k) * dt > exc.end_time
+        batched = not drive.moving
+        # the base is driven up to the first sample that ends past the motion,
+        # then the engine holds it still (n_out: the motion outlasts the run)
+        ends_past = (np.arange(1, n_out) * k) * dt > drive.end_time
         last_driven = int(np.argmax(ends_past)) + 1 if ends_past.any() else n_out
         i = 1
         while i < n_out:
@@ -365,19 +428,20 @@ class Engine(ABC):
         return n_out, None
 
     def _sample_interpolated(self, poses: np.ndarray, t_out: np.ndarray, dt: float, k: int,
-                             exc: Any, watch: _Watchdog) -> tuple[int, tuple[Status, str] | None]:
+                             drive: BaseDrive, watch: _Watchdog
+                             ) -> tuple[int, tuple[Status, str] | None]:
         """Step one at a time and interpolate poses linearly onto the output times."""
         n_out = t_out.size
         prev = poses[0].copy()
         step, i, checked = 0, 1, 1
-        moving = not exc.is_free
+        moving = drive.moving
         while i < n_out:
             if moving:
                 self._advance_driven(step * dt, 1, dt)
             else:
                 self._advance(1)
             step += 1
-            if moving and step * dt > exc.end_time and self._fix_base():
+            if moving and step * dt > drive.end_time and self._fix_base():
                 moving = False
             cur = np.array(self._read_poses(), dtype=float)
             # keep quaternions on one hemisphere so that interpolation is short-way
@@ -479,26 +543,26 @@ class _Watchdog:
     #: is stopped.
     PERIOD = 1.0
 
-    def __init__(self, scenario: Scenario, unmodelled: Sequence[tuple[int, int]] = ()) -> None:
-        self.masses = np.array([b.m for b in scenario.blocks])
+    def __init__(self, scenario: Scenario, drive: BaseDrive,
+                 unmodelled: Sequence[tuple[int, int]] = ()) -> None:
+        geo = scenario.geometry
+        self.masses = geo.masses
         # body pairs the engine has no contact between: any overlap is a missed contact
-        self.overlaps = OverlapWatch(scenario, unmodelled) if unmodelled else None
-        height = scenario.stack.total_height
-        exc = scenario.excitation
-        u_base, v_base = exc.motion_bounds(scenario.duration)
-        # a falling block cannot leave a ball of a few stack heights (or, for a wide
-        # assembly, of its size) around its start
-        scale = max(height, scenario.stack.size) if scenario.is_assembly else height
-        self.reach2 = (3.0 * scale + 2.0 * u_base + 1.0) ** 2
-        c, th0 = scenario.initial_poses()
-        self.x0, self.z0 = c[:, 0], c[:, 1]
-        # overturning is measured from each block's own orientation at rest (an
-        # assembly's blocks need not stand upright); None: all upright (stacks)
-        angles = scenario.block_angles
+        self.overlaps = OverlapWatch(scenario, drive, unmodelled) if unmodelled else None
+        height = geo.total_height
+        u_base, v_base = drive.motion.motion_bounds(scenario.duration)
+        # a falling block cannot leave a ball of a few heights (or, for a wide
+        # geometry, of its size) around its start
+        self.reach2 = (3.0 * max(height, geo.size) + 2.0 * u_base + 1.0) ** 2
+        p0 = scenario.initial_poses()
+        self.x0, self.z0 = p0[:, 0], p0[:, 1]
+        # overturning is measured from each block's own orientation at rest (a
+        # geometry's blocks need not stand upright); None: all upright
+        angles = geo.angles
         self.half_turn0 = None if not angles.any() else 0.5 * angles
-        self.free = exc.is_free
-        mgz0 = float(self.masses @ c[:, 1])
-        mgz_up = mgz0 if th0 == 0.0 else float(self.masses @ scenario.stack.centroids[:, 1])
+        self.free = not drive.moving
+        mgz0 = float(self.masses @ p0[:, 1])
+        mgz_up = mgz0 if scenario.theta0 == 0.0 else float(self.masses @ geo.centroids[:, 1])
         # potential energy may not rise above its start in free motion, beyond
         # the contact penetration noise of a soft engine
         self.z_limit = mgz0 + 0.02 * abs(mgz0 - mgz_up) + 1e-4 * self.masses.sum() * height

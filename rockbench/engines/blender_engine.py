@@ -84,12 +84,14 @@ What Blender really does (measured with bpy 5.0.1, see tests/test_engine_blender
   crashes there, so it empties the scene through the data API (same trajectories to the
   bit), and every operator gets its context explicitly.
 * Blender's matrices are float32: poses carry ~1e-7 relative rounding.
-* **Assemblies** (:class:`~rockbench.scenarios.assembly.Assembly`) of rectangular blocks:
+* **Geometries** (:class:`~rockbench.geometry.Geometry`) of rectangular blocks:
   each block a box (a hull when chamfered) at its pose, held in the plane like a single
   block; a fixed support a PASSIVE box (any other convex polygon a hull shrunk by the
-  margin), twice the deepest block in depth, placed with the base every frame. Every
-  block gets sqrt(μ_if) and the base and supports μ / sqrt(μ_if), so that every pair's
-  product is the scenario's (stacks too: before, every body got sqrt(μ) and an interface
+  margin), twice the deepest block in depth, placed with the base every frame. Each body's
+  friction is chosen so that every pair's product is the scenario's
+  (:func:`~rockbench.engines.friction.product_frictions`): √μ on every body when μ_if = μ;
+  on a column the base μ and the blocks alternating 1 and μ_if; otherwise every block
+  √μ_if and the base and supports μ / √μ_if (before, every body got √μ and an interface
   of μ_if = 0.05 on a base of 0.25 carried 0.25; the upper block rocked to 0.12 λ instead of
   sliding; now within 0.3 % of the exact slip). Convex polygonal prisms are unsupported:
   Bullet computes a hull's inertia from its bounding box (+16 to +70 % about y on the
@@ -97,10 +99,12 @@ What Blender really does (measured with bpy 5.0.1, see tests/test_engine_blender
   their centroid explode in the first step (a trapezoid 20 m/s, a voussoir 250 m/s;
   symmetric hulls, chamfered blocks, do not). Measured at rest over 0.5 s: column,
   parapet and 6 × 3 wall ≤ 9e-7 λ, ≤ 5.3e-6 m; a block on a support rides it to 1e-3.
-* **Tilting table in the base's frame.** A :class:`~rockbench.scenarios.TiltTable` base
-  reaches tens of metres at metres per second; in Blender's single-precision Bullet the
-  5-drum column's bottom drum then slipped 10 mm behind its base by α = 0.24 (at 0.025/s)
-  and the column moved at 0.183 (−24 % of the LP). The plugin therefore keeps the base
+* **Tilting table in the base's frame.** A base whose travel has no bound (a
+  :class:`~rockbench.scenarios.TiltTable`'s ramp, the only such motion; the plugin tells it
+  from the drive alone, see :func:`_runs_away`) reaches tens of metres at metres per
+  second; in Blender's single-precision Bullet the 5-drum column's bottom drum then
+  slipped 10 mm behind its base by α = 0.24 (at 0.025/s) and the column moved at 0.183
+  (−24 % of the LP). The plugin therefore keeps the base
   still and tilts the scene's gravity by −ü_g each frame (mid-frame value, exact for a
   translating base), adding u_g to the x it reads: B2 lifts within 2e-5 λ of Housner's
   reference, the parapet and the column move at +2.8 % and +1.6 % of the LP (0.025/s).
@@ -151,12 +155,12 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
-from rockbench.engines.friction import assembly_frictions
-from rockbench.engines.settings import EngineSettings
+from rockbench.engines.drive import BaseDrive
+from rockbench.engines.friction import product_frictions
+from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import EngineUnavailable, UnsupportedScenario
+from rockbench.geometry import Support
 from rockbench.scenarios import Scenario
-from rockbench.scenarios.assembly import Support
-from rockbench.scenarios.excitation import TiltTable
 
 __all__ = ["BlenderEngine", "BlenderSettings", "BLENDER_DEFAULTS", "BPY_PYTHON"]
 
@@ -294,6 +298,14 @@ class BlenderEngine(Engine):
     fresh_process: ClassVar[bool] = True
     requires: ClassVar[tuple[str, ...]] = ("bpy",)
     extra: ClassVar[str] = "blender"
+    knob_roles: ClassVar[dict[str, KnobRole]] = {
+        "fps": KnobRole.FRAME_RATE, "substeps_per_frame": KnobRole.SUBSTEPS,
+        "solver_iterations": KnobRole.ITERATIONS, "collision_shape": KnobRole.COLLISION_SHAPE,
+        "collision_margin": KnobRole.COLLISION_MARGIN}
+    # the step is 1 / (fps · substeps_per_frame): doubling the frame rate halves it
+    # (KnobRole.SUBSTEPS refines Bullet's (n + 1) convention, not Blender's n)
+    refinement: ClassVar[str] = "fps"
+    contact_model: ClassVar[str] = "impulse"
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         # Δt 0.1 ms (1000 fps × 10 sub-steps), 20 iterations, blocks held in the rocking
         # plane (50 iterations: as accurate on free rocking, but one of the mirrored
@@ -329,8 +341,8 @@ class BlenderEngine(Engine):
         self._view_layer: Any = None
         self._frame = 1
         self._frame_length = 0.0
-        #: A tilting table's excitation, run as tilted gravity; None otherwise.
-        self._tilt: TiltTable | None = None
+        #: A base that runs away (a tilting table), run in its own frame as tilted gravity.
+        self._tilt = False
         self._g = 9.81
         self._u: list[float] = []
         self._poses = np.zeros((0, 7))
@@ -408,23 +420,23 @@ class BlenderEngine(Engine):
         if s.friction is not None:
             mus = [math.sqrt(s.friction)] * (scenario.n_blocks + 1)
         else:  # Bullet multiplies the two bodies' coefficients (every pair gets its own)
-            mus = assembly_frictions(c.friction, c.block_friction, scenario.n_blocks)
+            mus = product_frictions(scenario.geometry, c.friction, c.block_friction)
         e = math.sqrt(c.restitution if s.restitution is None else s.restitution)
 
-        exc = scenario.excitation
+        drive = self.drive
+        geo = scenario.geometry
         blocks = scenario.blocks
-        reach = max(0.5 * b.width for b in blocks) + scenario.stack.total_height \
-            + exc.motion_bounds(scenario.duration)[0]
-        if scenario.is_assembly:  # wide scenes: the blocks' spread along x too
-            reach += scenario.stack.reach + scenario.stack.size
+        # wide scenes (not a column) need the blocks' spread along x too (geo.room)
+        reach = max(0.5 * b.width for b in blocks) + geo.total_height + drive.travel + geo.room
         depth = max(b.depth for b in blocks)
         half = (max(1.0, 2.0 * reach), max(1.0, 2.0 * reach, depth), 0.5)
         base = self._base = _prism(bpy, scene, "base", _box_profile(half[0], half[2]),
                                    half[1])
         base.location = (0.0, 0.0, -half[2])
-        # a tilting table is its base's frame, the scene's gravity tilted (see _drive_base)
-        self._tilt = exc if isinstance(exc, TiltTable) else None
-        moving = not exc.is_free and self._tilt is None
+        # a base that travels without bound (a tilting table) is run in its own frame, the
+        # scene's gravity tilted (rule: _runs_away; see _drive_base)
+        self._tilt = _runs_away(drive)
+        moving = drive.moving and not self._tilt
         motor = moving and s.drive == "motor"
         _rigid_body(bpy, base, s, type_="ACTIVE" if motor else "PASSIVE", shape="BOX",
                     mass=_MOTOR_BASE_MASS * sum(b.m for b in blocks) if motor else 1.0,
@@ -432,7 +444,7 @@ class BlenderEngine(Engine):
         self._motor = _motor_drive(bpy, scene, base, s) if motor else None
         # an assembly's supports: PASSIVE bodies of the base's kind, placed with it
         self._supports = []
-        for k, sup in enumerate(getattr(scenario.stack, "supports", ())):
+        for k, sup in enumerate(geo.supports):
             if motor:
                 raise UnsupportedScenario("blender: drive='motor' moves the base body only; "
                                           "an assembly's supports need drive='kinematic'")
@@ -442,10 +454,9 @@ class BlenderEngine(Engine):
                         friction=mus[0], restitution=e, kinematic=moving)
             self._supports.append((ob, float(ob.location.x)))
 
-        centroids, th0 = scenario.initial_poses()
         self._blocks = []
-        for i, (blk, (cx, cz), a, mu) in enumerate(zip(
-                blocks, centroids, th0 + scenario.block_angles, mus[1:], strict=True)):
+        for i, (blk, (cx, cz, a), mu) in enumerate(zip(
+                blocks, scenario.initial_poses(), mus[1:], strict=True)):
             shape = _SHAPES[s.collision_shape]
             if blk.chamfer > 0.0 and shape == "BOX":
                 shape = "CONVEX_HULL"
@@ -467,9 +478,9 @@ class BlenderEngine(Engine):
         # base displacement at every frame end (frame f is time (f − 1) / fps); split
         # frames get Blender's sub-step targets, linear between the knob's frames
         if moving:
-            t = np.arange(n_frames + 1) * frame
+            t = drive.grid(frame, n_frames + 1)
             t_key = np.arange(n_frames // s.substeps_per_frame + 2) / s.fps if split else t
-            u = np.asarray(exc.displacement(np.minimum(t_key, exc.end_time)), float)
+            u = drive.displacement(np.minimum(t_key, drive.end_time))[:, 0]
             self._u = (np.interp(t, t_key, u) if split else u).tolist()
         else:
             self._u = []
@@ -479,10 +490,10 @@ class BlenderEngine(Engine):
         return frame
 
     def _drive_base(self, t: float, dt: float) -> None:
-        if self._tilt is not None:
+        if self._tilt:
             # in the base's frame every body feels −m·ü_g besides its weight: exact for a
             # translating base; ü_g is linear in t, so its mid-frame value is the frame's mean
-            a = float(self._tilt.acceleration(t + 0.5 * dt))
+            a = float(self.drive.acceleration(t + 0.5 * dt)[0])
             self._scene.gravity = (-a, 0.0, -self._g)
             return
         # the frame ending at t + dt: the base is there when Blender steps into it
@@ -521,26 +532,47 @@ class BlenderEngine(Engine):
             q = m.to_quaternion()
             p = m.translation
             out[i] = (p.x, p.y, p.z, q.w, q.x, q.y, q.z)
-        if self._tilt is not None:  # from the base's frame to the world's
+        if self._tilt:  # from the base's frame to the world's
             out[:, 0] += self._tilt_displacement()
         return out
 
     def _tilt_displacement(self) -> float:
         """u_g at the current frame of a tilting table (the base's frame's offset)."""
-        return float(self._tilt.displacement((self._frame - 1) * self._frame_length))
+        return float(self.drive.displacement((self._frame - 1) * self._frame_length)[0])
 
     def _teardown(self) -> None:
-        if self._tilt is not None:
+        if self._tilt:
             self.base_end = self._tilt_displacement()
         elif self._base is not None:
             self.base_end = float(self._base.matrix_world.translation.x)
         if self._bpy is not None:
             _empty_scene(self._bpy)
         self._bpy = self._scene = self._base = self._motor = self._view_layer = None
-        self._tilt = None
+        self._tilt = False
         self._blocks = []
         self._supports = []
         self._u = []
+
+
+def _runs_away(drive: BaseDrive) -> bool:
+    """Whether the base is run in its own frame, as tilted gravity (see :meth:`_drive_base`).
+
+    The rule: the base's horizontal travel has no bound over unbounded time. Single-precision
+    Bullet cannot follow such a base (a tilting table's ramp, u_g ∝ t³, reaches tens of
+    metres at metres per second), while every bounded motion (pulses, sinusoids, records:
+    centimetres to decimetres) is placed kinematically. Of today's motions this picks
+    exactly the tilting table, whose uniformly growing ü_g also makes the mid-frame value
+    the frame's mean; it needs nothing but the drive (never the excitation's type). A
+    never-ending motion with no closed-form bound (its ``motion_bounds`` refuses an
+    infinite horizon) is placed kinematically like any other.
+    """
+    if not drive.moving or math.isfinite(drive.end_time):
+        return False  # a base that stops travels a bounded distance
+    try:
+        bound = drive.motion.horizontal_bounds()[0]
+    except ValueError:
+        return False
+    return not math.isfinite(bound)
 
 
 def _empty_scene(bpy: Any) -> None:

@@ -7,27 +7,29 @@ of the two bodies' coefficients equal the scenario's values. Each run owns a
 DIRECT-mode client (``pybullet.connect(pybullet.DIRECT)``), disconnected in
 ``_teardown``.
 
-Assemblies (:class:`~rockbench.scenarios.assembly.Assembly`): rectangular blocks are
-boxes, convex prisms convex hulls (shrunk by the collision margin, like chamfered
+Geometries (:class:`~rockbench.geometry.Geometry`): rectangular blocks are boxes,
+convex prisms convex hulls (shrunk by the collision margin, like chamfered
 blocks), each at its pose; a fixed support is one more body of the ground's kind
 (static, or a fixed-base multibody driven with the ground's velocity), a box when it
 is an axis-aligned rectangle, else a hull, twice the deepest block in depth. A
 prism's x–z product of inertia is not zero, and Bullet takes principal moments
 only: its body frame is the principal frame, turned by φ about y from the block's,
-and the poses read back are turned by −φ. Every block gets sqrt(μ_if) and the
-ground and supports μ / sqrt(μ_if), so that each pair's product is the scenario's
-(a block touches blocks and the base at once, so the alternation of stacks cannot
-be used). Measured (issue 18, accurate preset): the box assemblies rest to < 2e-5 λ;
-on the tilting table the parapet, the 5-drum column and the t/R = 0.2 arch move at
-+2.0 %, +2.1 % and +0.04 % of the LP factor (the arch with its springer on the
-far side moving too); the thin t/R = 0.15 arch settles on its hull joints and moves
-4.5 % early, not quasi-statically.
+and the poses read back are turned by −φ. Frictions:
+:func:`~rockbench.engines.friction.product_frictions` (a column alternates 1 and
+μ_if on its blocks; any other geometry, whose blocks touch blocks and the base at
+once, gets sqrt(μ_if) on every block and μ / sqrt(μ_if) on the ground and
+supports, so that each pair's product is the scenario's). Measured (issue 18,
+accurate preset): the box assemblies rest to < 2e-5 λ; on the tilting table the
+parapet, the 5-drum column and the t/R = 0.2 arch move at +2.0 %, +2.1 % and
++0.04 % of the LP factor (the arch with its springer on the far side moving too);
+the thin t/R = 0.15 arch settles on its hull joints and moves 4.5 % early, not
+quasi-statically.
 
 Measured pitfalls this module works around (see docs/engine-notes.md):
 
 * Bullet combines friction and restitution of two bodies as a product, so each
   body gets sqrt(μ) and sqrt(e) (with an interface friction: see
-  :func:`product_frictions`).
+  :func:`rockbench.engines.friction.product_frictions`).
 * Default linear/angular damping is 0.04: set to 0.
 * ``contactBreakingThreshold`` (default 0.02 m) keeps the lifted pivot's contact
   points in the manifold while the edge is less than 2 cm above the ground; this
@@ -55,11 +57,12 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
-from rockbench.engines.friction import assembly_frictions
-from rockbench.engines.settings import EngineSettings
+from rockbench.engines.friction import product_frictions
+from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import Block, Scenario
-from rockbench.scenarios.assembly import Support, rotate
+from rockbench.geometry import Block, Support
+from rockbench.geometry.polygon import rotate
+from rockbench.scenarios import Scenario
 
 __all__ = ["BulletEngine", "BulletSettings"]
 
@@ -223,6 +226,15 @@ class BulletEngine(Engine):
     }
     requires: ClassVar[tuple[str, ...]] = ("pybullet",)
     extra: ClassVar[str] = "bullet"
+    knob_roles: ClassVar[dict[str, KnobRole]] = {
+        "timestep": KnobRole.TIME_STEP, "fps": KnobRole.FRAME_RATE,
+        "substeps": KnobRole.SUBSTEPS, "solver_iterations": KnobRole.ITERATIONS,
+        "solver_residual_threshold": KnobRole.TOLERANCE,
+        "collision_shape": KnobRole.COLLISION_SHAPE,
+        "collision_margin": KnobRole.COLLISION_MARGIN}
+    # the step is 1 / ((substeps + 1) · fps): a finer rung doubles substeps + 1
+    refinement: ClassVar[str] = "substeps"
+    contact_model: ClassVar[str] = "impulse"
     known_failures: ClassVar[dict[str, str]] = {
         "assembly_rest": (
             "arch-rest (9 voussoirs, t/R = 0.2, accurate preset): Bullet's convex-hull "
@@ -254,11 +266,11 @@ class BulletEngine(Engine):
     # ------------------------------------------------------------------ hooks
     def _check_supported(self, scenario: Scenario) -> None:
         c = scenario.contact
-        if scenario.is_assembly and c.block_friction == 0.0 < c.friction:
+        if scenario.geometry.column is None and c.block_friction == 0.0 < c.friction:
             raise UnsupportedScenario(
                 "bullet multiplies the two bodies' friction coefficients: frictionless "
-                "block-block joints with friction on the base cannot both hold in an "
-                "assembly, whose blocks touch each other and the base")
+                "block-block joints with friction on the base cannot both hold in a "
+                "geometry whose blocks touch each other and the base (not a column)")
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
         s: BulletSettings = settings  # type: ignore[assignment]
@@ -303,48 +315,43 @@ class BulletEngine(Engine):
             else s.collision_margin
 
         blocks = scenario.blocks
-        height = scenario.stack.total_height
-        exc = scenario.excitation
-        reach = max(0.5 * b.width for b in blocks) + height \
-            + exc.motion_bounds(scenario.duration)[0]
-        if scenario.is_assembly:  # wide scenes: the blocks' spread along x too
-            reach += scenario.stack.reach + scenario.stack.size
+        geo = scenario.geometry
+        drive = self.drive
+        # (a geometry that is not a column spreads along x too: its room)
+        reach = max(0.5 * b.width for b in blocks) + geo.total_height + drive.travel \
+            + geo.room
         ground_half = (max(1.0, 2.0 * reach), max(1.0, 2.0 * reach, max(b.depth for b in blocks)),
                        0.5)
         self._ground_z = -ground_half[2]
         gshape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=ground_half, **kw)
         # a moving base must be a fixed-base multibody: Bullet ignores the velocity
         # of a static (mass 0) btRigidBody in contacts
-        moving = not exc.is_free
+        moving = drive.moving
         ground_maximal = s.maximal_coordinates and not moving
         self._ground = pb.createMultiBody(0.0, gshape, basePosition=(0.0, 0.0, self._ground_z),
                                           useMaximalCoordinates=ground_maximal, **kw)
 
         c = scenario.contact
-        if scenario.is_assembly:
-            mus = assembly_frictions(c.friction, c.block_friction, scenario.n_blocks)
-        else:
-            mus = product_frictions(c.friction, c.block_friction, scenario.n_blocks)
+        mus = product_frictions(geo, c.friction, c.block_friction)
         e = c.restitution if s.restitution is None else s.restitution
         rest = math.sqrt(e)
         self._set_dynamics(self._ground, mus[0], rest, None)
-        # an assembly's supports: bodies of the ground's kind at their place on the base
+        # the supports: bodies of the ground's kind at their place on the base
         depth = max(b.depth for b in blocks)
         self._supports: list[tuple[int, float, float]] = []
-        for sup in getattr(scenario.stack, "supports", ()):
+        for sup in geo.supports:
             shape, (px, pz) = self._support_shape(sup, depth)
             body = pb.createMultiBody(0.0, shape, basePosition=(px, 0.0, pz),
                                       useMaximalCoordinates=ground_maximal, **kw)
             self._set_dynamics(body, mus[0], rest, None, margin=self._hull_margin)
             self._supports.append((body, px, pz))
 
-        centroids, th0 = scenario.initial_poses()
+        poses = scenario.initial_poses()
         self._bodies: list[int] = []
         # (block index, cos φ/2, sin φ/2) of the bodies whose frame is turned by φ from
         # the block's (prisms: their principal frame)
         self._turns: list[tuple[int, float, float]] = []
-        for i, (blk, (cx, cz), th, mu) in enumerate(zip(
-                blocks, centroids, th0 + scenario.block_angles, mus[1:], strict=True)):
+        for i, (blk, (cx, cz, th), mu) in enumerate(zip(blocks, poses, mus[1:], strict=True)):
             if isinstance(blk, Block):
                 phi, inertia = 0.0, tuple(float(j) for j in blk.inertia)
             else:
@@ -365,13 +372,11 @@ class BulletEngine(Engine):
         # velocity (u(t_{i+1}) − u(t_i)) / dt, so that Bullet's integration of the
         # base lands exactly on u(t_{i+1}) and the block feels ü_g at mid-step
         if moving:
-            end = min(scenario.duration, exc.end_time)
-            n = int(math.ceil(end / dt)) + int(math.ceil(out_dt / dt)) + 2
-            ti = np.arange(n + 1) * dt
-            u = np.asarray(exc.displacement(ti), float)
+            n = drive.steps_until_stop(dt) + int(math.ceil(out_dt / dt)) + 2
+            u = drive.displacement(drive.grid(dt, n + 1))[:, 0]
             self._u = u.tolist()
             self._v = (np.diff(u) / dt).tolist()
-            self._u_end = float(exc.displacement(end))
+            self._u_end = float(drive.final_displacement()[0])
         return dt
 
     def _block_shape(self, blk: Any, s: BulletSettings, phi: float = 0.0) -> int:
@@ -542,18 +547,6 @@ class BulletEngine(Engine):
                 self._pb.disconnect(physicsClientId=self._cid)
             finally:
                 self._cid = None
-
-
-def product_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
-    """Per-body coefficients (ground first) whose pairwise products are μ and μ_if.
-
-    Bullet multiplies the two bodies' coefficients: ground–bottom block gets μ and
-    every block–block pair μ_if. Equal coefficients keep the square root on every
-    body; otherwise the ground carries μ, the blocks alternate 1 and μ_if.
-    """
-    if mu_if == mu:
-        return [math.sqrt(mu)] * (n_blocks + 1)
-    return [mu] + [1.0 if i % 2 == 0 else mu_if for i in range(n_blocks)]
 
 
 def principal_frame(tensor: np.ndarray) -> tuple[float, tuple[float, float, float]]:

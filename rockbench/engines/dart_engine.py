@@ -7,17 +7,20 @@ mesh: see ``DartSettings.chamfer_shape``), explicit mass and centroidal inertia;
 the base is a box skeleton (top face z = 0) on a ``PrismaticJoint`` along x whose
 ``VELOCITY`` actuator is commanded every step with the secant velocity of the
 excitation, so the base position follows u_g(t) exactly at the
-step nodes. DART's time stepping is velocity based (semi-implicit Euler with an
+step nodes (``Capabilities.base_axes`` "x": the x component of the base motion).
+DART's time stepping is velocity based (semi-implicit Euler with an
 LCP for contacts and friction); restitution and friction are per ``ShapeNode``.
 
-Assemblies (:class:`~rockbench.scenarios.assembly.Assembly`): rectangular blocks are
-boxes and convex prisms triangle meshes of the prism (as for chamfered blocks with
+Any :class:`~rockbench.geometry.Geometry`: rectangular blocks are boxes and convex
+prisms triangle meshes of the prism (as for chamfered blocks with
 ``chamfer_shape="mesh"``), each at its pose with its full inertia tensor (a
 polygon's x–z product of inertia is not zero); fixed supports are more shapes of the
 base body (a box for an axis-aligned rectangle, else a prism mesh, twice the deepest
-block in depth). DART gives a pair the smaller of its two friction coefficients:
-the blocks carry μ_if and the base μ, which is exact when μ_if ≥ μ; an assembly with
-μ_if < μ is unsupported (its blocks touch each other and the base at once).
+block in depth). DART gives a pair the smaller of its two friction coefficients.
+A column (:attr:`~rockbench.geometry.Geometry.column`: each block on the one below)
+gives the bottom block max(μ, μ_if) and the others μ_if, exact for any μ, μ_if; any
+other geometry gives every block μ_if and the base μ, which is exact when μ_if ≥ μ;
+with μ_if < μ it is unsupported (its blocks may touch each other and the base at once).
 Measured (issue 18): the box assemblies rest to < 1e-4 λ at every preset and open the
 LP mechanism on the tilting table within +2.3 % (column) and +3.2 % (parapet) of its
 factor at the fast preset; the 9-voussoir arch rests to 3e-7 λ with FCL meshes
@@ -51,10 +54,10 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
-from rockbench.engines.settings import EngineSettings
+from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import Block, Scenario
-from rockbench.scenarios.assembly import Support
+from rockbench.geometry import Block, Support
+from rockbench.scenarios import Scenario
 
 __all__ = ["DartEngine", "DartSettings"]
 
@@ -197,6 +200,11 @@ class DartEngine(Engine):
     }
     requires: ClassVar[tuple[str, ...]] = ("dartpy",)
     extra: ClassVar[str] = "dart"
+    knob_roles: ClassVar[dict[str, KnobRole]] = {"timestep": KnobRole.TIME_STEP}
+    contact_model: ClassVar[str] = "impulse"
+    # the parapet and the column within 3.2 % of the limit analysis on the tilting
+    # table; the finer presets cost 11-43 CPU s per simulated s on the arches
+    assembly_preset: ClassVar[str] = "fast"
 
     @classmethod
     def version(cls) -> str:
@@ -206,12 +214,12 @@ class DartEngine(Engine):
     # ------------------------------------------------------------------ hooks
     def _check_supported(self, scenario: Scenario) -> None:
         c = scenario.contact
-        if scenario.is_assembly and c.block_friction < c.friction:
+        if scenario.geometry.column is None and c.block_friction < c.friction:
             raise UnsupportedScenario(
                 "dart gives a contact the smaller of the two bodies' friction coefficients: "
                 f"block-block joints at μ_if = {c.block_friction:g} below the base's "
-                f"μ = {c.friction:g} cannot both hold in an assembly, whose blocks touch each "
-                "other and the base")
+                f"μ = {c.friction:g} cannot both hold in a geometry other than a column, "
+                "whose blocks may touch each other and the base")
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
         s: DartSettings = settings  # type: ignore[assignment]
@@ -222,7 +230,9 @@ class DartEngine(Engine):
                 "DART's own collision detector has no mesh support, so chamfered blocks "
                 "need collision_detector fcl/ode/bullet or chamfer_shape=narrow_box"
             )
-        supports = getattr(scenario.stack, "supports", ())
+        geo = scenario.geometry
+        column = geo.column
+        supports = geo.supports
         if s.collision_detector == "dart" and (
                 not all(isinstance(b, Block) for b in scenario.blocks)
                 or not all(_rectangle(sup) for sup in supports)):
@@ -253,16 +263,16 @@ class DartEngine(Engine):
         e_body = math.sqrt(e) if s.restitution_mode == "sqrt" else e
 
         # base: a box (top face z = 0) on a prismatic joint along x, driven kinematically
-        exc = scenario.excitation
-        t_move = min(scenario.duration, exc.end_time) if not exc.is_free else 0.0
-        u_max = exc.motion_bounds(scenario.duration)[0]
-        span = 4.0 * (scenario.stack.total_height + max(b.width for b in scenario.blocks))
-        if scenario.is_assembly:  # wide scenes: the blocks' spread along x too
-            span += 2.0 * u_max + scenario.stack.reach + scenario.stack.size
-        else:
-            span += 2.0 * u_max + float(np.max(np.abs(scenario.stack.offsets)))
+        drive = self.drive
+        t_move = drive.stop
+        u_max = drive.travel
+        span = 4.0 * (geo.total_height + max(b.width for b in scenario.blocks))
+        if column is None:  # wide scenes: the blocks' spread along x too
+            span += 2.0 * u_max + geo.reach + geo.size
+        else:  # a column: its blocks' offsets from x = 0
+            span += 2.0 * u_max + float(np.max(np.abs(column.offsets)))
         depth = 4.0 * max(b.depth for b in scenario.blocks) + span
-        thick = max(0.5, 0.25 * scenario.stack.total_height)
+        thick = max(0.5, 0.25 * geo.total_height)
         base = dart.dynamics.Skeleton("base")
         joint, body = base.createPrismaticJointAndBodyNodePair()
         joint.setAxis(np.array([1.0, 0.0, 0.0]))
@@ -287,10 +297,9 @@ class DartEngine(Engine):
         world.addSkeleton(base)
 
         # blocks: one skeleton each, free joint at the centroid
-        centroids, th0 = scenario.initial_poses()
+        poses = scenario.initial_poses()
         self._skels = []
-        for i, (blk, th) in enumerate(zip(scenario.blocks, th0 + scenario.block_angles,
-                                          strict=True)):
+        for i, (blk, (cx, cz, th)) in enumerate(zip(scenario.blocks, poses, strict=True)):
             skel = dart.dynamics.Skeleton(f"block{i}")
             _, bn = skel.createFreeJointAndBodyNodePair()
             if not isinstance(blk, Block):  # an assembly's convex prism
@@ -303,11 +312,12 @@ class DartEngine(Engine):
                     w = blk.width - 2.0 * blk.chamfer
                     shape = dart.dynamics.BoxShape(np.array([w, blk.depth, blk.height]))
                 tensor = np.diag(blk.inertia)
-            block_mu = mu_if if scenario.is_assembly or i > 0 else max(mu, mu_if)
+            # a column's bottom block touches the base and the block above only
+            block_mu = mu_if if column is None or i > 0 else max(mu, mu_if)
             _add_shape(bn, shape, block_mu, e_body)
             bn.setInertia(dart.dynamics.Inertia(blk.m, np.zeros(3), tensor))
             # FreeJoint coordinates: rotation vector (about +y by θ), then translation
-            skel.setPositions(np.array([0.0, th, 0.0, centroids[i, 0], 0.0, centroids[i, 1]]))
+            skel.setPositions(np.array([0.0, th, 0.0, cx, 0.0, cz]))
             skel.setVelocities(np.zeros(6))
             world.addSkeleton(skel)
             self._skels.append(skel)
@@ -322,12 +332,12 @@ class DartEngine(Engine):
         if t_move > 0:
             # one output interval of margin: the loop fixes the base at a sample boundary
             n = int(math.ceil((t_move + 1.0 / scenario.output_rate) / dt)) + 2
-            t = np.arange(n + 1) * dt
-            f = exc.displacement if s.base_drive == "velocity" else exc.velocity
-            self._cmd = (np.diff(np.asarray(f(t), float)) / dt).tolist()
+            t = drive.grid(dt, n + 1)
+            f = drive.displacement if s.base_drive == "velocity" else drive.velocity
+            self._cmd = (np.diff(f(t)[:, 0]) / dt).tolist()
             # the base stands still at the start, the excitation starts from rest
             joint.setPosition(0, 0.0)
-        self._exc_fn = exc.displacement if s.base_drive == "velocity" else exc.velocity
+        self._base_fn = drive.displacement if s.base_drive == "velocity" else drive.velocity
         self._poses = np.empty((len(self._skels), 7))
         self._get_positions = [sk.getPositions for sk in self._skels]
         return dt
@@ -339,8 +349,8 @@ class DartEngine(Engine):
         """Base command for step ``i`` (starting at time ``t``)."""
         if i < len(self._cmd):
             return self._cmd[i]
-        f = self._exc_fn  # past the precomputed span (not expected): evaluate directly
-        return (float(f(t + dt)) - float(f(t))) / dt
+        f = self._base_fn  # past the precomputed span (not expected): evaluate directly
+        return (float(f(t + dt)[0]) - float(f(t)[0])) / dt
 
     def _advance_driven(self, t0: float, n: int, dt: float) -> None:
         # one Python loop over precomputed commands: no per-step method dispatch

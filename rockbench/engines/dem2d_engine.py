@@ -87,7 +87,7 @@ exactly μ N while the stack slides as one, so it keeps each such kick as a
 steady slip: 1.9e-4 m on the 5 Hz / 4 mm pulse at μ = 0.1. The shear springs
 take no part (without the shear dashpot: 3.4 %; a quarter of the step: 3.46 %);
 the error falls as sqrt(ε) (3.5, 1.8, 0.81, 0.57 % at ε = 2e-5, 5e-6, 1e-6,
-5e-7), and so does the step. Such a contact of a single block or a stack takes
+5e-7), and so does the step. Such a contact of a column (a single block, a stack) takes
 ε = ``slip_compliance`` where that is smaller: ``accurate`` 5e-7 (k_n = 3.7e12
 N/m³ for Single #2 at μ = 0.15, 4.5e12 for the paper's stack at μ = 0.1; 6.3 ×
 smaller steps, 5–7 × the CPU). ``fast`` keeps ε for every contact; the
@@ -102,28 +102,36 @@ and ζ_max = β_max sqrt(k_max / m_eff) / 2; rounded down to a whole number of
 steps per output interval. The bound is conservative: B2, Single #2 and the
 paper's stack stay stable at 8 × its safety-1 step; ``accurate`` uses safety 2.
 
-Assemblies
+Geometries
 ----------
-An :class:`~rockbench.scenarios.assembly.Assembly` is built from the same
-parts: each block (rectangle or convex prism) a polygon at its pose, each
-fixed support a body with zero inverse mass translating with the base, and
-the same face-pair contact with corner sub-contacts between every block and
-every other body (:func:`contact_pairs`). The stiffness from ``compliance``
-(``slip_compliance`` is not applied: an assembly has no exact sliding
-reference, and its stiffest faces already set small steps) and the impact β
-of each pair come from its interface at rest
+A column (:attr:`~rockbench.geometry.Geometry.column`: upright rectangular
+blocks each on the one below, the bottom one on the base: the single blocks,
+the paper's stacks, and the catalog's drum columns and parapets) is built as
+a stack: its contacts are laid out from its chain (:func:`adjacent_pairs`,
+:func:`corner_contact`: the blocks a contact carries as one upright rigid
+body, ``slip_compliance`` where a contact slides first) and the stable step is
+that of the stiffest face. Any other :class:`~rockbench.geometry.Geometry` (a
+running-bond wall, an arch: blocks at any pose, convex prisms, fixed supports)
+is built from the same parts: each block (rectangle or convex prism) a polygon
+at its pose, each fixed support a body with zero inverse mass translating with
+the base, and the same face-pair contact with corner sub-contacts between every
+block and every other body (:func:`contact_pairs`). The stiffness from
+``compliance`` (``slip_compliance`` is not applied: such a geometry has no exact
+sliding reference, and its stiffest faces already set small steps) and the
+impact β of each pair come from its interface at rest
 (:func:`assembly_contacts`; a pair not in contact at rest takes the upper
 block alone on its own face). A block of a wall or an arch rests on several
 faces at once, so the stable step is bounded per block on all its contacts
 together (:func:`_assembly_step`; the pulses of the collapse study stay stable
-at 4 × that step on the column, the parapet, the wall and the arch). Single
-blocks and stacks are built exactly as before (bit-identical trajectories).
+at 4 × that step on the wall and the arch), and the base is wider by the
+geometry's ``room``.
 Measured on the tilting table (rates 0.05 and 0.025 /s, ``fast``): onsets
-+0.8 % (b/h = 0.5 block), +2.8 % (parapet, 0.125), +1.7 % (5-drum column,
++0.8 % (b/h = 0.5 block), +3.0 % (parapet, 0.125), +2.3 % (5-drum column,
 0.24), +1.0 % (9-voussoir arch t/R = 0.2, 0.298) over the limit-analysis
-factor at the slower rate, the rate^(2/3)-extrapolated onsets within 0.1 %,
-with the LP's blocks and rotation signs. Steps at ``fast``: 9 µs (5-drum
-column), 11 µs (parapet), 1.7 µs (arch t/R = 0.2: its short voussoir faces
+factor at the slower rate, the rate^(2/3)-extrapolated onsets within 0.1 %
+(0.24 % on the parapet, 0.17 % on the column, as built either way), with the
+LP's blocks and rotation signs. Steps at ``fast``: 11 µs (5-drum
+column), 18 µs (parapet), 1.7 µs (arch t/R = 0.2: its short voussoir faces
 carry the whole arch), 0.5 µs (the 6 × 3 wall of 0.24 × 0.12 m bricks, about
 8 s CPU per simulated second: too costly for the tilting table's tens of
 seconds).
@@ -169,7 +177,7 @@ import numpy as np
 
 from rockbench.engines import dem2d_kernels as K
 from rockbench.engines.base import Capabilities, Engine
-from rockbench.engines.settings import EngineSettings
+from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
 from rockbench.scenarios import Free, Scenario
 
@@ -216,7 +224,7 @@ class Dem2dSettings(EngineSettings):
         of every contact if that is stiffer. None: k_n, k_s as given (and
         ``slip_compliance`` ignored).
     slip_compliance : float or None
-        ε of the contacts of a single block or a stack that slide before the
+        ε of the contacts of a column (a single block, a stack) that slide before the
         blocks they carry rock (μ < b / h_G, :func:`slides_first`), where it is
         smaller than ``compliance``: each reversal of slip leaves the blocks
         the momentum of their elastic pitch, ∝ sqrt(ε) (module docstring).
@@ -284,20 +292,19 @@ class Dem2dSettings(EngineSettings):
 
 
 def contact_pairs(scenario: Scenario) -> list[tuple[int, int]]:
-    """Candidate body pairs (upper first): every block against the base (index
-    ``len(blocks)``) and against every block below it.
+    """Candidate body pairs (upper first): every block against the base, every fixed
+    support and every block before it.
 
-    An assembly's bodies are its blocks, then its supports, then the base
-    (the order of the limit-analysis bodies); every block is a candidate
-    against the base, every support and every block before it.
+    Bodies are numbered as in the geometry's interfaces: its blocks, then its
+    supports, then the base (index ``len(blocks)`` where there are no
+    supports, e.g. a column: each block against the base and every block
+    below it).
     """
     nb = len(scenario.blocks)
-    if scenario.is_assembly:
-        ns = len(scenario.stack.supports)
-        fixed = (nb + ns, *range(nb, nb + ns))
-        return [p for i in range(nb) for p in (*((i, f) for f in fixed),
-                                               *((i, j) for j in range(i)))]
-    return [p for i in range(nb) for p in ((i, nb), *((i, j) for j in range(i)))]
+    ns = len(scenario.geometry.supports)
+    fixed = (nb + ns, *range(nb, nb + ns))
+    return [p for i in range(nb) for p in (*((i, f) for f in fixed),
+                                           *((i, j) for j in range(i)))]
 
 
 @dataclass(frozen=True)
@@ -333,14 +340,21 @@ class CornerContact:
 
 def corner_contact(scenario: Scenario, pair: tuple[int, int],
                    subcontacts: int) -> CornerContact:
-    """The corner sub-contact of ``pair`` (upper body first; the base is
+    """The corner sub-contact of ``pair`` of a column (upper body first; the base is
     ``len(blocks)``), the carried blocks taken upright as one rigid body."""
     blocks = scenario.blocks
     i, j = pair
     faces = [blocks[i]] if j == len(blocks) else [blocks[i], blocks[j]]
-    width = min(b.width - 2 * b.chamfer for b in faces)
+    if j == len(blocks):
+        width = 2.0 * blocks[i].pivot_half_width
+    else:  # the shared part of the two faces (an offset block overhangs)
+        col = scenario.geometry.column
+        if col is None:
+            raise ValueError(f"scenario {scenario.name!r} is not a column")
+        left, right = col.overlap(i)
+        width = right - left
     depth = min(b.depth for b in faces)
-    centroids = scenario.stack.centroids  # upright
+    centroids = scenario.geometry.centroids  # upright
     carried = range(i, len(blocks))
     mass = sum(blocks[k].m for k in carried)
     xg = sum(blocks[k].m * centroids[k][0] for k in carried) / mass
@@ -354,7 +368,7 @@ def corner_contact(scenario: Scenario, pair: tuple[int, int],
 
 
 def _own_contact(scenario: Scenario, i: int, subcontacts: int) -> CornerContact:
-    """Block ``i`` of an assembly alone on its own bottom face (a pair not in contact at rest)."""
+    """Block ``i`` alone on its own bottom face (a pair not in contact at rest)."""
     blk = scenario.blocks[i]
     return CornerContact(area=0.5 * blk.width / (subcontacts - 1) * blk.depth,
                          half_width=0.5 * blk.width, mass=blk.m,
@@ -363,23 +377,23 @@ def _own_contact(scenario: Scenario, i: int, subcontacts: int) -> CornerContact:
 
 def assembly_contacts(scenario: Scenario,
                       subcontacts: int) -> dict[tuple[int, int], CornerContact]:
-    """The corner sub-contact of every interface of an assembly at rest, by body pair.
+    """The corner sub-contact of every interface of a geometry at rest, by body pair.
 
-    The interfaces are the limit analysis's (face-to-face contacts at rest;
-    bodies numbered as in :func:`contact_pairs`). The carried body is the
-    upper one; it carries itself and every block whose centroid is higher,
-    taken as one body with its own radius of gyration (a load estimate that
+    The interfaces are the geometry's (:attr:`~rockbench.geometry.Geometry.interfaces`,
+    face-to-face contacts at rest; bodies numbered as in :func:`contact_pairs`). The
+    carried body is the upper one; it carries itself and every block whose centroid is
+    higher, taken as one body with its own radius of gyration (a load estimate that
     errs on the heavy side: it only stiffens the contact); a face within 45°
     of vertical (a head joint) carries no weight: the lighter block alone.
     b is half the interface's length, h the distance of the carried centroid
     from the interface's line.
     """
-    asm = scenario.stack
-    nb = len(asm.blocks)
-    cents = asm.centroids
-    masses = np.array([b.m for b in asm.blocks])
+    geo = scenario.geometry
+    nb = len(geo.bodies)
+    cents = geo.centroids
+    masses = geo.masses
     out: dict[tuple[int, int], CornerContact] = {}
-    for f in asm.to_limit().interfaces:
+    for f in geo.interfaces:
         candidates = [k for k in (f.a, f.b) if k < nb]
         if abs(f.normal[1]) < math.sqrt(0.5):  # a head joint carries no weight
             up = min(candidates, key=lambda k: masses[k])
@@ -390,8 +404,8 @@ def assembly_contacts(scenario: Scenario,
             else:  # the normal points from a into b
                 up = f.b if f.normal[1] > 0 else f.a
             carried = masses[cents[:, 1] > cents[up, 1]].sum() + masses[up]
-        blk = asm.blocks[up]
-        depth = min(asm.blocks[k].depth for k in candidates)
+        blk = geo.bodies[up]
+        depth = min(geo.bodies[k].depth for k in candidates)
         out[(f.a, f.b)] = CornerContact(
             area=0.5 * f.length / (subcontacts - 1) * depth, half_width=0.5 * f.length,
             mass=float(carried), inertia=float(blk.inertia[1]) * float(carried) / blk.m,
@@ -401,7 +415,8 @@ def assembly_contacts(scenario: Scenario,
 
 def _pair_contact(scenario: Scenario, pair: tuple[int, int], subcontacts: int,
                   interfaces: dict[tuple[int, int], CornerContact] | None) -> CornerContact:
-    """:func:`corner_contact` of a stack's pair, or an assembly's interface contact."""
+    """:func:`corner_contact` of a column's pair, or the interface contact of any other
+    geometry (``interfaces`` from :func:`assembly_contacts`, None for a column)."""
     if interfaces is None:
         return corner_contact(scenario, pair, subcontacts)
     key = (min(pair), max(pair))
@@ -431,12 +446,14 @@ def slides_first(contact: CornerContact, mu: float) -> bool:
 def contact_stiffness(scenario: Scenario, s: Dem2dSettings) -> tuple[float, float]:
     """(k_n, k_s) in N/m³: the knobs, raised by ``compliance`` (k_s in proportion).
 
-    A single block's or a stack's contact that slides first (:func:`slides_first`) is
-    raised to ``slip_compliance`` where that is the smaller rotation.
+    A column's contact that slides first (:func:`slides_first`) is raised to
+    ``slip_compliance`` where that is the smaller rotation. A column's contacts are
+    its chain (:func:`adjacent_pairs`, :func:`corner_contact`), any other geometry's
+    its interfaces at rest (:func:`assembly_contacts`).
     """
     if s.compliance is None:
         return s.kn, s.ks
-    if scenario.is_assembly:
+    if scenario.geometry.column is None:
         kn = max([s.kn] + [stiffness_for(c, s.compliance, scenario.g) for c in
                            assembly_contacts(scenario, s.subcontacts).values()])
         return kn, s.ks * kn / s.kn
@@ -453,7 +470,7 @@ def contact_stiffness(scenario: Scenario, s: Dem2dSettings) -> tuple[float, floa
 
 
 def adjacent_pairs(scenario: Scenario) -> list[tuple[int, int]]:
-    """The pairs that touch in the upright stack: bottom block-base, then each block on
+    """The pairs that touch in an upright column: bottom block-base, then each block on
     the one below."""
     nb = len(scenario.blocks)
     return [(0, nb)] + [(i, i - 1) for i in range(1, nb)]
@@ -470,7 +487,8 @@ def pair_damping(scenario: Scenario, s: Dem2dSettings, kn: float) -> np.ndarray:
         omega_c = math.sqrt(kn * bottom.width * bottom.depth / bottom.m)
         return np.full(len(pairs), s.damping_ratio / omega_c)
     out = np.empty(len(pairs))
-    interfaces = assembly_contacts(scenario, s.subcontacts) if scenario.is_assembly else None
+    interfaces = (assembly_contacts(scenario, s.subcontacts)
+                  if scenario.geometry.column is None else None)
     for p, pair in enumerate(pairs):
         c = _pair_contact(scenario, pair, s.subcontacts, interfaces)
         out[p] = 2.0 * s.impact_zeta / math.sqrt(kn * c.area / c.effective_mass)
@@ -539,8 +557,9 @@ def impact_zeta_for(scenario: Scenario, s: Dem2dSettings, eta: float) -> float:
 
 def _assembly_step(scenario: Scenario, s: Dem2dSettings, kn: float, ks: float,
                    beta: np.ndarray) -> float:
-    """The stable step of an assembly: the smallest over its blocks of the damped
-    central-difference limit of each block on all its contacts at rest together.
+    """The stable step of a geometry other than a column: the smallest over its blocks
+    of the damped central-difference limit of each block on all its contacts at rest
+    together.
 
     A block in a wall or an arch rests on several faces at once: its springs
     add up (K_b = Σ k L d over its interfaces, at least its own face's k w d)
@@ -598,6 +617,16 @@ class Dem2dEngine(Engine):
     # numba is optional (the kernels run interpreted without it, slowly), hence no
     # ``requires``; the extra installs it and version() says whether it is used
     extra: ClassVar[str] = "dem"
+    knob_roles: ClassVar[dict[str, KnobRole]] = {
+        "compliance": KnobRole.CONTACT_SOFTNESS, "kn": KnobRole.CONTACT_STIFFNESS,
+        "subcontacts": KnobRole.CONTACT_POINTS}
+    # the step follows the contact stiffness, which follows the compliance: halving it
+    # stiffens the contact toward the rigid limit and shortens the step
+    refinement: ClassVar[str] = "compliance"
+    contact_model: ClassVar[str] = "penalty"
+    # onsets within 3 % of the limit analysis on the tilting table at a fraction of the
+    # accurate cost (the walls' small bricks cost µs steps)
+    assembly_preset: ClassVar[str] = "fast"
     # keep in step with the README's engine table
     known_failures: ClassVar[dict[str, str]] = {
         # none at the accurate preset (measured with benchmarks/calibrate_dem2d.py and the
@@ -608,7 +637,6 @@ class Dem2dEngine(Engine):
     def __init__(self) -> None:
         self._state: dict[str, Any] = {}
         self._poses = np.zeros((0, 7))
-        self._exc: Any = None
         self._dt = 0.0
         self._nb = 0
         self._buf = np.zeros(0)
@@ -648,7 +676,7 @@ class Dem2dEngine(Engine):
         beta = pair_damping(scenario, s, kn)
         if s.timestep is not None:
             return float(s.timestep), kn, ks, beta
-        if scenario.is_assembly:
+        if scenario.geometry.column is None:
             return _assembly_step(scenario, s, kn, ks, beta), kn, ks, beta
         k_max = max(kn, ks) * max(b.width * b.depth for b in blocks)
         m_eff = min(1.0 / (1.0 / b.m + (b.b ** 2 + b.h ** 2) / b.inertia[1]) for b in blocks)
@@ -671,19 +699,17 @@ class Dem2dEngine(Engine):
         dt = 1.0 / (scenario.output_rate * k)
         blocks = scenario.blocks
         nb = len(blocks)
-        exc = scenario.excitation
-        h_tot = scenario.stack.total_height
+        geo = scenario.geometry
+        drive = self.drive
+        h_tot = geo.total_height
         w_max = max(b.width for b in blocks)
-        t_end = min(exc.end_time, scenario.duration) if not exc.is_free else 0.0
-        u_max = exc.motion_bounds(scenario.duration)[0]
-        # base: a box whose top face is z = 0, wide enough for a toppled stack
-        half = 2.0 * (h_tot + w_max) + u_max + 1.0
-        # an assembly: its spread along x too, and its fixed supports, bodies that move
-        # with the base (vertices about their vertex mean, which is inside a convex polygon)
-        supports = [np.asarray(sup.array, float) for sup in getattr(scenario.stack, "supports",
-                                                                    ())]
-        if scenario.is_assembly:
-            half += scenario.stack.reach + scenario.stack.size
+        # base: a box whose top face is z = 0, wide enough for a toppled column, and
+        # for any other geometry its spread along x too (room)
+        half = 2.0 * (h_tot + w_max) + drive.travel + 1.0
+        half += geo.room
+        # fixed supports: bodies that move with the base (vertices about their vertex
+        # mean, which is inside a convex polygon)
+        supports = [np.asarray(sup.array, float) for sup in geo.supports]
         thick = max(1.0, 0.5 * h_tot)
         profiles = [np.asarray(b.profile(), float) for b in blocks]
         profiles += [v - v.mean(axis=0) for v in supports]
@@ -708,10 +734,8 @@ class Dem2dEngine(Engine):
         radius *= 1.0 + 1e-6
         radius += 1e-6
 
-        centroids, th0 = scenario.initial_poses()
         pos = np.zeros((nbody, 3))
-        pos[:nb, 0:2] = centroids
-        pos[:nb, 2] = th0 + scenario.block_angles if scenario.is_assembly else th0
+        pos[:nb] = scenario.initial_poses()
         for k, v in enumerate(supports):
             pos[nb + k, 0:2] = v.mean(axis=0)
         pos[nbody - 1] = (0.0, -0.5 * thick, 0.0)
@@ -743,14 +767,13 @@ class Dem2dEngine(Engine):
                       self._state["pair_edges"], self._state["shear"], kn, ks,
                       pair_mu, beta,
                       float(scenario.g), self._poses)
-        self._exc = exc
         self._dt = dt
         self._nb = nb
         self._buf = np.zeros(0)
         self._buf_start = 0
         # last step that may be driven (the run's end, or the first output
-        # sample after the excitation's): chunks stop there
-        self._drive_end = int(math.ceil(t_end / dt)) + k + 1
+        # sample after the motion's): chunks stop there
+        self._drive_end = drive.steps_until_stop(dt) + k + 1
         self._step_index = -1
         self._still = np.zeros(0)
         return dt
@@ -769,8 +792,9 @@ class Dem2dEngine(Engine):
         i = k0 - self._buf_start
         if i < 0 or i + n > self._buf.size:
             self._buf_start = k0
-            steps = k0 + np.arange(max(n, min(_BASE_CHUNK, self._drive_end - k0)))
-            self._buf = np.asarray(self._exc.displacement(steps * self._dt), float)
+            m = max(n, min(_BASE_CHUNK, self._drive_end - k0))
+            u = self.drive.displacement(self.drive.grid(self._dt, m, start=k0))
+            self._buf = np.ascontiguousarray(u[:, 0], float)
             i = 0
         return self._buf[i:i + n]
 
@@ -827,4 +851,3 @@ class Dem2dEngine(Engine):
     def _teardown(self) -> None:
         self._state = {}
         self._args = ()
-        self._exc = None

@@ -37,15 +37,18 @@ Scene (a MultibodyPlant + SceneGraph Diagram stepped by a Simulator)
   these compliant contacts are (nearly) plastic, as Housner assumes, and
   scenarios with restitution > 0 are reported unsupported.
 * No damping, no sleeping (Drake has neither).
-* Assemblies: every block, rectangular or a convex prism, is a body at its pose (a
-  prism with its full inertia tensor, whose x–z product is not zero), its corner
-  spheres on every slice; fixed supports are shapes of the ground's body (boxes, or
-  prisms twice the blocks' depth) with corner spheres of their own, so that a block's
-  face on a support's corner has a point too. Frictions by
-  :func:`assembly_harmonic_frictions`: a block may touch the base and other blocks at
-  once, so an interface friction at most half the base's is unsupported. At ``fast``
-  (0.5 ms) TAMSI's Newton iteration fails on larger assemblies (the 18-brick wall
-  at 0.03 s): the run ends there as ``unstable`` (NaN poses, Drake's reason logged).
+* Any geometry (:mod:`rockbench.geometry`): every block, rectangular or a convex prism,
+  is a body at its pose (a prism with its full inertia tensor, whose x–z product is not
+  zero), its corner spheres on every slice; fixed supports are shapes of the ground's
+  body (boxes, or prisms twice the blocks' depth) with corner spheres of their own, so
+  that a block's face on a support's corner has a point too. A column
+  (:attr:`~rockbench.geometry.Geometry.column`: each block touches only the ones below
+  and above it) takes its frictions from :func:`harmonic_frictions`; any other
+  geometry from :func:`assembly_harmonic_frictions`: a block may touch the base and
+  other blocks at once, so an interface friction at most half the base's is
+  unsupported there. At ``fast`` (0.5 ms) TAMSI's Newton iteration fails on larger
+  geometries (the 18-brick wall at 0.03 s): the run ends there as ``unstable`` (NaN
+  poses, Drake's reason logged).
 
 Drake's point contact between two boxes (or a convex prism and a box) yields a
 single contact point per pair, at one end of the rocking edge (y = ±depth/2).
@@ -86,10 +89,10 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
-from rockbench.engines.settings import EngineSettings
+from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import Block, Scenario
-from rockbench.scenarios.assembly import Support
+from rockbench.geometry import Block, Support
+from rockbench.scenarios import Scenario
 
 __all__ = ["DrakeEngine", "DrakeSettings"]
 
@@ -308,7 +311,7 @@ def _add_corners(plant: Any, body: Any, profile: np.ndarray, y: float, r: float,
 
 
 def assembly_harmonic_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
-    """Per-geometry coefficients (base and supports first) for the blocks of an assembly.
+    """Per-geometry coefficients (base and supports first) for a geometry that is not a column.
 
     A block may touch other blocks and the base at once, and blocks in contact may
     form odd cycles, so every block takes 1/μ_if (a block pair's a's sum to 2/μ_if)
@@ -354,6 +357,10 @@ class DrakeEngine(Engine):
     }
     requires: ClassVar[tuple[str, ...]] = ("pydrake",)
     extra: ClassVar[str] = "drake"
+    knob_roles: ClassVar[dict[str, KnobRole]] = {
+        "timestep": KnobRole.TIME_STEP, "penetration_allowance": KnobRole.CONTACT_SOFTNESS,
+        "stiction_tolerance": KnobRole.TOLERANCE, "collision_slices": KnobRole.CONTACT_POINTS}
+    contact_model: ClassVar[str] = "compliant-point"
 
     @classmethod
     def version(cls) -> str:
@@ -375,11 +382,12 @@ class DrakeEngine(Engine):
                 f"plastic); restitution {scenario.contact.restitution} cannot be modelled"
             )
         mu, mu_if = scenario.contact.friction, scenario.contact.block_friction
-        if scenario.is_assembly and 0.0 < mu and mu_if <= 0.5 * mu:
+        if scenario.geometry.column is None and 0.0 < mu and mu_if <= 0.5 * mu:
             raise UnsupportedScenario(
                 f"drake combines two geometries' frictions harmonically (2 μ₁μ₂/(μ₁ + μ₂)): "
-                f"an assembly's blocks get interface friction {mu_if:g} next to base friction "
-                f"{mu:g} only when the interface's exceeds half the base's")
+                f"the blocks of a geometry other than a column get interface friction "
+                f"{mu_if:g} next to base friction {mu:g} only when the interface's exceeds "
+                f"half the base's")
 
     def _proximity(self, s: DrakeSettings, friction: float, stiffness: float | None,
                    compliant: bool) -> Any:
@@ -419,7 +427,9 @@ class DrakeEngine(Engine):
 
         assert isinstance(settings, DrakeSettings)
         s = settings
+        geo = scenario.geometry
         blocks = scenario.blocks
+        drive = self.drive
         builder = DiagramBuilder()
         cfg = MultibodyPlantConfig(
             time_step=s.timestep, contact_model=s.contact_model,
@@ -436,8 +446,9 @@ class DrakeEngine(Engine):
         if k is None and s.static_penetration is not None:
             # the weight is shared by the n_sl slices' contacts along the rocking edge
             k = 2.0 * sum(b.m for b in blocks) * scenario.g / (n_sl * s.static_penetration)
-        assembly = scenario.is_assembly
-        combine = assembly_harmonic_frictions if assembly else harmonic_frictions
+        # a column's blocks touch only the ones below and above them (alternating
+        # coefficients); any other geometry's may touch other blocks and the base at once
+        combine = harmonic_frictions if geo.column is not None else assembly_harmonic_frictions
         mus = combine(mu, scenario.contact.block_friction, len(blocks))
         p_blocks = {f: self._proximity(s, f, k, compliant=True) for f in set(mus[1:])}
         p_ground = self._proximity(s, mus[0], k, compliant=False)
@@ -466,18 +477,16 @@ class DrakeEngine(Engine):
                     corners += _add_corners(plant, body, blk.profile(), y, r, p_block,
                                             f"corner{i}_{j}")
             bodies.append(body)
-        # a ground large enough for the stack, its tilt and the base travel
-        ext = scenario.stack.total_height + max(b.width for b in blocks)
-        if assembly:  # wide scenes: the blocks' spread along x too
-            ext += scenario.stack.reach + scenario.stack.size
-        lx = 2.0 * (2.0 * ext + 2.0 * scenario.excitation.motion_bounds(scenario.duration)[0] + 1.0)
+        # a ground large enough for the geometry, its tilt and the base travel
+        # (room: a wide geometry's spread along x too; none for a column)
+        ext = geo.total_height + max(b.width for b in blocks) + geo.room
+        lx = 2.0 * (2.0 * ext + 2.0 * drive.travel + 1.0)
         ly = 2.0 * (2.0 * max(b.depth for b in blocks) + 0.5)
         lz = 2.0 * (0.25 * ext + 0.1)
         ground = Box(lx, ly, lz)
         x_ground = RigidTransform([0.0, 0.0, -0.5 * lz])
-        self._exc = scenario.excitation
         self._joint = None
-        if scenario.excitation.is_free:
+        if not drive.moving:
             anchor = plant.world_body()  # the body of the ground and supports
             ground_id = plant.RegisterCollisionGeometry(anchor, x_ground, ground, "ground",
                                                         p_ground)
@@ -493,9 +502,9 @@ class DrakeEngine(Engine):
             self._joint = plant.AddJoint(PrismaticJoint(
                 "slide", plant.world_frame(), base.body_frame(), [1.0, 0.0, 0.0],
                 -math.inf, math.inf, 0.0))
-        # an assembly's supports: shapes of the ground's body (welded to the moving base)
+        # the geometry's supports: shapes of the ground's body (welded to the moving base)
         depth = max(b.depth for b in blocks)
-        for k_s, sup in enumerate(getattr(scenario.stack, "supports", ())):
+        for k_s, sup in enumerate(geo.supports):
             shapes.append(self._add_support(plant, anchor, sup, depth, p_ground,
                                             f"support{k_s}"))
             if r is not None:  # its corners on block faces, as the blocks' on its faces
@@ -517,10 +526,9 @@ class DrakeEngine(Engine):
         sim = Simulator(diagram)
         root = sim.get_mutable_context()
         pc = plant.GetMyMutableContextFromRoot(root)
-        centroids, th = scenario.initial_poses()
-        for body, c, a in zip(bodies, centroids, th + scenario.block_angles, strict=True):
+        for body, (cx, cz, a) in zip(bodies, scenario.initial_poses(), strict=True):
             plant.SetFreeBodyPose(pc, body, RigidTransform(RotationMatrix.MakeYRotation(a),
-                                                           [c[0], 0.0, c[1]]))
+                                                           [cx, 0.0, cz]))
         sim.Initialize()
         # discrete state = [q; v]; a free body's q is (qw, qx, qy, qz, x, y, z)
         self._state = pc.get_discrete_state(0)
@@ -556,9 +564,9 @@ class DrakeEngine(Engine):
     # ------------------------------------------------------------------ drive
     def _load_chunk(self, i0: int) -> None:
         """Precompute base displacement and velocity for steps i0…i0+_CHUNK."""
-        t = (i0 + np.arange(_CHUNK)) * self._dt
-        self._u = np.asarray(self._exc.displacement(t), float)
-        self._v = np.asarray(self._exc.velocity(t + self._phase * self._dt), float)
+        drive, dt = self.drive, self._dt
+        self._u = drive.displacement(drive.grid(dt, _CHUNK, start=i0))[:, 0]
+        self._v = drive.velocity(drive.grid(dt, _CHUNK, start=i0, phase=self._phase))[:, 0]
         self._chunk_start = i0
 
     def _drive_base(self, t: float, dt: float) -> None:
@@ -571,8 +579,8 @@ class DrakeEngine(Engine):
         self._joint.set_translation_rate(self._pc, self._v[j])
 
     def _fix_base(self) -> bool:
-        exc, j, pc = self._exc, self._joint, self._pc
-        j.set_translation(pc, float(exc.displacement(exc.end_time)))
+        drive, j, pc = self.drive, self._joint, self._pc
+        j.set_translation(pc, float(drive.displacement(drive.end_time)[0]))
         j.set_translation_rate(pc, 0.0)
         if self._sap:
             j.Lock(pc)  # a zero-velocity constraint in SAP: the base cannot creep

@@ -10,31 +10,38 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["assembly_frictions"]
+from rockbench.geometry import Geometry
+
+__all__ = ["product_frictions"]
 
 
-def assembly_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
-    """Per-body coefficients (ground and supports first) for the blocks of an assembly.
+def product_frictions(geometry: Geometry, mu: float, mu_if: float) -> list[float]:
+    """Per-body coefficients whose pairwise products are μ (body–base or support) and μ_if.
 
-    A block of an assembly may touch other blocks and the base at once, so every
-    block gets sqrt(μ_if) and the base μ / sqrt(μ_if): block pairs get μ_if, block
-    and base μ. Needs μ_if > 0 unless μ = 0 too.
+    Equal coefficients: √μ on every body. A column (each block touches only the
+    ones below and above it): the base μ, the blocks alternating 1 and μ_if.
+    Any other geometry, whose blocks may touch other blocks and the base at
+    once: √μ_if on every block and μ / √μ_if on the base and supports (which
+    needs μ_if > 0 unless μ = 0 too).
 
     Parameters
     ----------
+    geometry : Geometry
+        What is built.
     mu : float
         Friction between a block and the base or a support.
     mu_if : float
         Friction between two blocks.
-    n_blocks : int
-        Number of blocks.
 
     Returns
     -------
     list of float
-        The base's (and supports') coefficient, then one per block.
+        The base's (and supports') coefficient, then one per body.
     """
+    n = geometry.n_bodies
     if mu_if == mu:
-        return [math.sqrt(mu)] * (n_blocks + 1)
+        return [math.sqrt(mu)] * (n + 1)
+    if geometry.column is not None:
+        return [mu] + [1.0 if i % 2 == 0 else mu_if for i in range(n)]
     root = math.sqrt(mu_if)
-    return [mu / root] + [root] * n_blocks
+    return [mu / root] + [root] * n

@@ -20,7 +20,7 @@ parameters (tolerance 1.666e-4 in the ``QM/16`` norm, relaxation 0.1, 50
 sweeps between checks, at most 25 000 sweeps per step) and the contact
 detection (``STO``: contact points where two facing polygons overlap).
 
-Assemblies (:class:`~rockbench.scenarios.assembly.Assembly`): every block, rectangular
+Any geometry (:class:`~rockbench.geometry.Geometry`): every block, rectangular
 or a convex prism, is its polyhedron at its pose (the profile turned by the pose angle
 about its centroid); each fixed support is one more body with all six velocities driven,
 its x–z polygon extruded over twice the deepest block's depth, with the base's velocity
@@ -51,7 +51,7 @@ unavailable with the reason.
 
 Base driving: LMGC90 takes a driven velocity as an evolution table fixed before
 pre-processing, so the whole base velocity history is handed over at build: the
-exact u̇_g at every step time up to the end of the excitation, 0 afterwards
+exact u̇_g along x (``self.drive``) at every step time until the base stops, 0 afterwards
 (:meth:`_drive_base` has nothing left to do). The θ-method moves a driven
 degree of freedom by dt ((1 − θ) v_i + θ v_{i+1}): with θ = 1/2 the trapezoidal
 rule of the exact velocities (a 5 Hz / 4 mm pulse leaves the base within 2e-10 m
@@ -97,7 +97,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine, install_hint
-from rockbench.engines.settings import EngineSettings
+from rockbench.engines.drive import BaseDrive
+from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import EngineUnavailable, UnsupportedScenario
 from rockbench.scenarios import Scenario
 
@@ -168,6 +169,8 @@ class Lmgc90Engine(Engine):
     presets: ClassVar[dict[str, dict[str, Any]]] = {"accurate": {}, "fast": {"timestep": 1e-3}}
     requires: ClassVar[tuple[str, ...]] = ("compas_lmgc90",)
     extra: ClassVar[str] = "lmgc90"
+    knob_roles: ClassVar[dict[str, KnobRole]] = {"timestep": KnobRole.TIME_STEP}
+    contact_model: ClassVar[str] = "non-smooth"
     known_failures: ClassVar[dict[str, str]] = {
         "free_rocking": "B2 from 0.5 lambda: 2nd and 3rd impacts 2.3 % and 2.2 % late at "
                         "the accurate step (0.1 ms; 0.05 ms alike): LMGC90's impact keeps "
@@ -222,30 +225,27 @@ class Lmgc90Engine(Engine):
         s: Lmgc90Settings = settings  # type: ignore[assignment]
         mod = _solver_module()
         dt = float(s.timestep)
-        exc = scenario.excitation
+        drive = self.drive
+        geo = scenario.geometry
         blocks = scenario.blocks
-        u_max = exc.motion_bounds(scenario.duration)[0]
-        reach = max(0.5 * b.width for b in blocks) + scenario.stack.total_height + u_max
-        if scenario.is_assembly:  # wide scenes: the blocks' spread along x too
-            reach += scenario.stack.reach + scenario.stack.size
+        # wide scenes (not a column) need the blocks' spread along x too (geo.room)
+        reach = max(0.5 * b.width for b in blocks) + geo.total_height + drive.travel + geo.room
         half = (max(1.0, 2.0 * reach), max(1.0, 2.0 * reach, max(b.depth for b in blocks)))
         thick = 0.5
         base = _box_polyhedron(half[0], half[1], thick, centre=(0.0, 0.0, -thick))
 
-        centroids, th0 = scenario.initial_poses()
-        angles = th0 + scenario.block_angles
         bodies = [base]
-        # an assembly's supports: driven bodies with the base's velocity, twice the
+        # the geometry's supports: driven bodies with the base's velocity, twice the
         # deepest block in depth
         depth = max(b.depth for b in blocks)
-        supports = getattr(scenario.stack, "supports", ())
+        supports = geo.supports
         for sup in supports:
             v, f = _prism(sup.array - sup.array.mean(axis=0), depth)
             c = sup.array.mean(axis=0)
             bodies.append({"vertices": (v + (c[0], 0.0, c[1])).tolist(), "faces": f})
         self._first = first = 1 + len(supports)
         rot0 = []
-        for blk, (cx, cz), th in zip(blocks, centroids, angles, strict=True):
+        for blk, (cx, cz, th) in zip(blocks, scenario.initial_poses(), strict=True):
             r = _rot_y(float(th))
             v, f = _prism(blk.profile(), 0.5 * blk.depth)
             bodies.append({"vertices": (v @ r.T + (cx, 0.0, cz)).tolist(), "faces": f})
@@ -256,7 +256,7 @@ class Lmgc90Engine(Engine):
         solver = mod.Solver(dt=dt, theta=float(s.theta), density=densities[0])
         self._solver = solver
         solver.geometry_from_v_f(bodies, density=densities)
-        vx = _velocity_table(scenario, dt) if not exc.is_free else 0.0
+        vx = _velocity_table(drive, scenario.duration, dt) if drive.moving else 0.0
         for body in range(first):
             for comp in ("Vy", "Vz", "Rx", "Ry", "Rz"):
                 solver.apply_velocity(body, comp, 0.0)
@@ -282,7 +282,7 @@ class Lmgc90Engine(Engine):
         self._advance(n)
 
     def _fix_base(self) -> bool:
-        # the evolution table holds the base still after the excitation
+        # the evolution table holds the base still once the base motion has stopped
         return True
 
     def _advance(self, n: int) -> None:
@@ -403,17 +403,17 @@ def _box_polyhedron(hx: float, hy: float, hz: float,
     return {"vertices": (v + centre).tolist(), "faces": f}
 
 
-def _velocity_table(scenario: Scenario, dt: float) -> np.ndarray:
-    """The base velocity as an LMGC90 evolution table, shape (2, n): times, then values.
+def _velocity_table(drive: BaseDrive, duration: float, dt: float) -> np.ndarray:
+    """The base velocity along x as an LMGC90 evolution table, shape (2, n): times, values.
 
-    The exact u̇_g at every step time up to the end of the excitation, then 0
-    until past the end of the run (LMGC90 interpolates linearly between rows).
+    The exact u̇_g at every step time up to when the base stops (``drive.stop``), then 0
+    until past the end of the run (``duration``; LMGC90 interpolates linearly between
+    rows). ``drive`` must move.
     """
-    exc = scenario.excitation
-    t_end = min(exc.end_time, scenario.duration)
+    t_end = drive.stop
     n = int(math.ceil(t_end / dt - 1e-9)) + 1
-    t = np.arange(n + 1) * dt
-    v = np.asarray(exc.velocity(t), dtype=float)
+    t = drive.grid(dt, n + 1)
+    v = drive.velocity(t)[:, 0]
     v[t > t_end + 1e-12] = 0.0
-    tail = max(scenario.duration, t[-1]) + 1.0
+    tail = max(duration, t[-1]) + 1.0
     return np.vstack([np.append(t, tail), np.append(v, 0.0)])

@@ -66,9 +66,11 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
-from rockbench.engines.settings import EngineSettings
+from rockbench.engines.drive import BaseDrive
+from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.scenarios import Block, Scenario
+from rockbench.geometry import Block
+from rockbench.scenarios import Scenario
 
 __all__ = ["MujocoEngine", "MujocoSettings"]
 
@@ -211,6 +213,13 @@ class MujocoEngine(Engine):
     }
     requires: ClassVar[tuple[str, ...]] = ("mujoco",)
     extra: ClassVar[str] = "mujoco"
+    knob_roles: ClassVar[dict[str, KnobRole]] = {
+        "timestep": KnobRole.TIME_STEP, "iterations": KnobRole.ITERATIONS,
+        "tolerance": KnobRole.TOLERANCE, "timeconst_factor": KnobRole.CONTACT_SOFTNESS}
+    contact_model: ClassVar[str] = "soft-constraint"
+    # onsets within 0.1 % of the limit analysis on the tilting table at a fraction of the
+    # accurate cost
+    assembly_preset: ClassVar[str] = "fast"
 
     @classmethod
     def version(cls) -> str:
@@ -228,6 +237,7 @@ class MujocoEngine(Engine):
         """The MJCF model of ``scenario`` (public for inspection and tests)."""
         s = settings
         blocks = scenario.blocks
+        drive = BaseDrive(scenario.motion, scenario.duration)
         e = scenario.contact.restitution
         zeta = restitution_dampratio(e) if e > 0 else s.dampratio
         tau = s.timeconst_factor * s.timestep
@@ -242,19 +252,17 @@ class MujocoEngine(Engine):
         base_common = f'friction="{_fmt(mu)} 0 0" {contact_common}'
         if mu_if != mu:  # equal priorities take the larger friction
             base_common += ' priority="1"'
-        centroids, th = scenario.initial_poses()
+        geo = scenario.geometry
+        poses = scenario.initial_poses()
         mass_total = sum(b.m for b in blocks)
         # a base large enough for the stack, its tilt and the base travel
-        ext = scenario.stack.total_height + max(b.width for b in blocks)
-        if scenario.is_assembly:  # wide scenes: the blocks' spread along x too
-            ext += scenario.stack.reach + scenario.stack.size
-        hx = 2.0 * ext + 2.0 * scenario.excitation.motion_bounds(scenario.duration)[0] + 1.0
+        ext = geo.total_height + max(b.width for b in blocks) + geo.room
+        hx = 2.0 * ext + 2.0 * drive.travel + 1.0
         hy = 2.0 * max(b.depth for b in blocks) + 0.5
         hz = 0.25 * ext + 0.1
         flags = "" if s.multiccd else ' multiccd="disable"'
         assets, bodies = [], []
-        for i, (blk, c, th_i) in enumerate(zip(blocks, centroids, th + scenario.block_angles,
-                                               strict=True)):
+        for i, (blk, (cx, cz, th_i)) in enumerate(zip(blocks, poses, strict=True)):
             quat = (math.cos(0.5 * th_i), 0.0, math.sin(0.5 * th_i), 0.0)
             if blk.chamfer > 0 or not isinstance(blk, Block):  # a convex prism
                 prof = blk.profile()
@@ -270,7 +278,7 @@ class MujocoEngine(Engine):
                 t = blk.inertia_tensor
                 inertia = f'fullinertia="{_fmt((t[0, 0], t[1, 1], t[2, 2], 0.0, t[0, 2], 0.0))}"'
             bodies.append(
-                f'<body name="block{i}" pos="{_fmt((c[0], 0.0, c[1]))}" quat="{_fmt(quat)}">'
+                f'<body name="block{i}" pos="{_fmt((cx, 0.0, cz))}" quat="{_fmt(quat)}">'
                 f'<freejoint name="free{i}"/>'
                 f'<inertial pos="0 0 0" mass="{_fmt(blk.m)}" {inertia}/>'
                 f'<geom name="geom{i}" {shape} {geom_common}/></body>'
@@ -279,12 +287,12 @@ class MujocoEngine(Engine):
                      f'pos="0 0 {_fmt(-hz)}" {base_common}/>')
         # an assembly's fixed supports: prisms (world coordinates) on the base, wider than
         # any block in depth
-        for j, sup in enumerate(getattr(scenario.stack, "supports", ())):
+        for j, sup in enumerate(geo.supports):
             hd = max(b.depth for b in blocks)
             verts = [(x, y, z) for y in (-hd, hd) for x, z in sup.vertices]
             assets.append(f'<mesh name="support{j}" vertex="{_fmt(verts)}"/>')
             base_geom += f'<geom name="support{j}" type="mesh" mesh="support{j}" {base_common}/>'
-        if scenario.excitation.is_free:
+        if not drive.moving:
             base = base_geom
         else:
             mb = _BASE_MASS_RATIO * mass_total
@@ -318,12 +326,12 @@ class MujocoEngine(Engine):
         self._pose_view = self._data.qpos[: 7 * n].reshape(n, 7)
         self._poses = np.empty((n, 7))
         self._dt = float(self._model.opt.timestep)
-        self._exc = exc = scenario.excitation
+        drive = self.drive
         self._chunk_start = self._chunk_end = -1
         self._ul: list[float] = []
         self._vl: list[float] = []
         self._fl: list[float] = []
-        if not exc.is_free:
+        if drive.moving:
             self._jq = 7 * n  # slide joint: after the n free joints
             self._jv = 6 * n
             self._mbase = float(self._model.body_mass[n + 1])
@@ -331,8 +339,7 @@ class MujocoEngine(Engine):
             # then up to one output interval more (the base is fixed after the first sample
             # past the end); short runs thus precompute only what they use
             per_sample = max(1, math.ceil(1.0 / (scenario.output_rate * self._dt) - 1e-9))
-            t_drive = min(scenario.duration, exc.end_time)
-            self._n_drive = int(math.ceil(t_drive / self._dt)) + per_sample + 2
+            self._n_drive = drive.steps_until_stop(self._dt) + per_sample + 2
         mujoco.mj_forward(self._model, self._data)
         return self._dt
 
@@ -346,10 +353,9 @@ class MujocoEngine(Engine):
         """
         dt = self._dt
         size = max(n, min(_CHUNK, self._n_drive - i0))
-        t = (i0 + np.arange(size + 1)) * dt
-        v = self._exc.velocity(t)
-        self._u = np.asarray(self._exc.displacement(t), float)
-        self._v = np.asarray(v, float)
+        t = self.drive.grid(dt, size + 1, start=i0)
+        self._u = self.drive.displacement(t)[:, 0]
+        self._v = self.drive.velocity(t)[:, 0]
         # the force that takes the base from v(t) to v(t + dt) in one (semi-implicit) step
         self._f = self._mbase * np.diff(self._v) / dt
         # plain floats for the stepping loops (cheaper to index and assign than NumPy scalars)

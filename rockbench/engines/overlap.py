@@ -17,8 +17,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from rockbench.engines.drive import BaseDrive
+from rockbench.geometry.polygon import penetration, rotate
 from rockbench.scenarios import Scenario
-from rockbench.scenarios.assembly import penetration, rotate
 
 __all__ = ["OverlapWatch"]
 
@@ -31,28 +32,31 @@ CHECK_INTERVAL = 0.02
 
 
 class OverlapWatch:
-    """Overlaps of the named body pairs of an assembly, sample by sample.
+    """Overlaps of the named body pairs of a geometry, sample by sample.
 
     Parameters
     ----------
     scenario : Scenario
-        An assembly.
+        What runs.
+    drive : BaseDrive
+        Its base motion (the supports move with it).
     pairs : sequence of (int, int)
         Body pairs (limit-analysis numbering, module docstring) that the engine
         builds no contact between.
     """
 
-    def __init__(self, scenario: Scenario, pairs: Sequence[tuple[int, int]]) -> None:
-        asm = scenario.stack
+    def __init__(self, scenario: Scenario, drive: BaseDrive,
+                 pairs: Sequence[tuple[int, int]]) -> None:
+        asm = scenario.geometry
         self.n = scenario.n_blocks
-        self.profiles = [b.profile() for b in asm.blocks]
+        self.profiles = [b.profile() for b in asm.bodies]
         self.supports = [s.array for s in asm.supports]
         self.ground = self.n + len(self.supports)
         self.radius = np.array([float(np.hypot(*p.T).max()) for p in self.profiles])
         least = [float(min(np.ptp(p, axis=0))) for p in self.profiles]
         least += [float(min(np.ptp(s, axis=0))) for s in self.supports] + [np.inf]
         self.pairs = [(a, b, OVERLAP_FRACTION * min(least[a], least[b])) for a, b in pairs]
-        self.excitation = scenario.excitation
+        self.drive = drive
         self.every = max(1, round(CHECK_INTERVAL * scenario.output_rate))
 
     def first(self, poses: np.ndarray, t: np.ndarray) -> tuple[int, str] | None:
@@ -77,7 +81,7 @@ class OverlapWatch:
         x, z = pose[:, 0], pose[:, 2]
         w, qx, qy, qz = pose[:, 3], pose[:, 4], pose[:, 5], pose[:, 6]
         theta = np.arctan2(qx * qz + w * qy, 0.5 - (qx * qx + qy * qy))
-        u = float(self.excitation.displacement(t)) if not self.excitation.is_free else 0.0
+        u = float(self.drive.displacement(t)[0]) if self.drive.moving else 0.0
         polys: dict[int, np.ndarray] = {}
         for a, b, tol in self.pairs:
             if b < self.n and np.hypot(x[a] - x[b], z[a] - z[b]) > \

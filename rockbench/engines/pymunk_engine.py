@@ -10,13 +10,19 @@ Scene: one dynamic body per block with a convex :class:`pymunk.Poly` from
 ``Block.inertia[1]`` (the depth only scales the mass, so any planar stack is
 exact), and a KINEMATIC base body carrying a box whose top face is z = 0.
 
-Base driving: before each step starting at t the base gets the velocity
-u̇_g(t + dt/2) (midpoint rule: the position integrated by Chipmunk over the step
-is then exact to O(dt³), and the contact solver sees the mean velocity of the
-step). Chipmunk integrates a kinematic body's position as p += v dt, so the
-midpoint errors would accumulate to O(dt²) drift; the position is therefore
-reset to the exact u_g(t) at every step start. Both series are precomputed
-once (vectorised); :meth:`_advance_driven` drives and steps in one tight loop.
+Base driving (x and z: ``Capabilities.base_axes`` is ``"xz"``): before each
+step starting at t the base gets the velocity u̇_g(t + dt/2) (midpoint rule: the
+position integrated by Chipmunk over the step is then exact to O(dt³), and the
+contact solver sees the mean velocity of the step). Chipmunk integrates a
+kinematic body's position as p += v dt, so the midpoint errors would accumulate
+to O(dt²) drift; the position is therefore reset to the exact u_g(t) at every
+step start. The vertical component is applied in exactly the same way (pymunk's
+y is our z); a base still along z keeps the literal 0 of the horizontal-only
+loop. The series are precomputed once from :attr:`~Engine.drive` (vectorised);
+:meth:`_advance_driven` drives and steps in one tight loop. Tested: a block on a
+base that only moves vertically rides it (z − u_z constant, no rocking), and a
+block under a horizontal and a vertical pulse at once follows the Housner
+reference with the vertical acceleration within the accuracy of a horizontal one.
 
 Pitfalls handled (see docs/engine-notes.md): Chipmunk's default
 ``collision_slop`` of 0.1 m lets shapes sink 0.1 m (set to 0 by default here);
@@ -24,12 +30,12 @@ sleeping is disabled; ``damping`` is 1 (none); Chipmunk multiplies the friction
 and elasticity of the two shapes in contact, so every shape gets the square
 root of the scenario's coefficient and each contact pair sees exactly
 ``scenario.contact.friction`` and ``scenario.contact.restitution``. With an
-interface friction μ_if ≠ μ, a stack's blocks alternate 1 and μ_if over a base of
-μ; an assembly's blocks, which touch blocks and the base at once, each get √μ_if
-over a base and supports of μ/√μ_if (:func:`~rockbench.engines.friction.assembly_frictions`;
-μ_if = 0 < μ is then unsupported). Tested: two blocks side by side on the base stay
-put at 0.2 g on μ = 0.3 whatever μ_if, and slide as the exact Coulomb slider at 0.5 g
-on μ = 0.15.
+interface friction μ_if ≠ μ (:func:`~rockbench.engines.friction.product_frictions`),
+a column's blocks alternate 1 and μ_if over a base of μ; any other geometry's
+blocks, which may touch blocks and the base at once, each get √μ_if over a base
+and supports of μ/√μ_if (μ_if = 0 < μ is then unsupported). Tested: two blocks
+side by side on the base stay put at 0.2 g on μ = 0.3 whatever μ_if, and slide as
+the exact Coulomb slider at 0.5 g on μ = 0.15.
 
 Calibration (``benchmarks/calibrate_pymunk.py``, pymunk 7.3, free rocking B0–B3
 over 20 s and the six Single #2 pulses): ``accurate`` (dt 0.1 ms) max
@@ -58,18 +64,23 @@ from typing import Any, ClassVar
 import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
-from rockbench.engines.friction import assembly_frictions
-from rockbench.engines.settings import EngineSettings
+from rockbench.engines.friction import product_frictions
+from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
+from rockbench.geometry import Block, Geometry, Prism, Support
 from rockbench.scenarios import Scenario
 
 __all__ = ["PymunkEngine", "PymunkSettings"]
 
-# Scenario fields known to be planar (x–z) or to act only through mass/inertia
-# (a Block's or a Prism's; a Stack's or an Assembly's)
-_PLANAR_BLOCK_FIELDS = frozenset({"width", "depth", "height", "density", "mass", "chamfer",
-                                  "vertices", "_centroid", "_area", "_moments"})
-_PLANAR_STACK_FIELDS = frozenset({"blocks", "offsets", "poses", "supports", "_centroids"})
+# Fields of the geometry model known to be planar (x–z) or to act only through mass and
+# inertia; anything else a (sub)class adds is refused when set (see _check_supported)
+_PLANAR_FIELDS: dict[type, frozenset[str]] = {
+    Block: frozenset({"width", "depth", "height", "density", "mass", "chamfer"}),
+    Prism: frozenset({"vertices", "depth", "density", "mass", "centre_of_gravity",
+                      "_centroid", "_area", "_moments"}),
+    Support: frozenset({"vertices"}),
+    Geometry: frozenset({"bodies", "poses", "supports", "base", "_centroids", "_interfaces"}),
+}
 
 
 def _is_set(value: Any) -> bool:
@@ -138,7 +149,8 @@ class PymunkEngine(Engine):
 
     name: ClassVar[str] = "pymunk"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=2, max_blocks=None,
-                                                        chamfer=True, assemblies=True)
+                                                        chamfer=True, assemblies=True,
+                                                        base_axes="xz")
     Settings: ClassVar[type[EngineSettings]] = PymunkSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
@@ -151,6 +163,12 @@ class PymunkEngine(Engine):
     }
     requires: ClassVar[tuple[str, ...]] = ("pymunk",)
     extra: ClassVar[str] = "pymunk"
+    knob_roles: ClassVar[dict[str, KnobRole]] = {
+        "timestep": KnobRole.TIME_STEP, "iterations": KnobRole.ITERATIONS,
+        "collision_slop": KnobRole.CONTACT_SLOP}
+    contact_model: ClassVar[str] = "impulse"
+    # the fast preset moves early on the tilting table; 0.1 ms meets the limit analysis
+    assembly_preset: ClassVar[str] = "single"
 
     def __init__(self) -> None:
         self._space: Any = None
@@ -167,10 +185,14 @@ class PymunkEngine(Engine):
         self._get_pos: Any = None
         self._get_angle: Any = None
         self._poses = np.zeros((0, 7))
-        self._v_mid = np.zeros(1)
-        self._u_start = np.zeros(1)
+        # the base's x and z at each step start and velocities at each step's midpoint
+        self._v_mid = np.zeros((1, 2))
+        self._u_start = np.zeros((1, 2))
         self._u_list: list[float] = []
         self._v_list: list[float] = []
+        # their z components; None while the base is still along z
+        self._uz_list: list[float] | None = None
+        self._vz_list: list[float] | None = None
 
     @classmethod
     def version(cls) -> str:
@@ -181,21 +203,24 @@ class PymunkEngine(Engine):
     def _check_supported(self, scenario: Scenario) -> None:
         """Refuse out-of-plane content, which a planar engine cannot model.
 
-        Every field the scenario model has today is planar-symmetric (blocks
-        centred in depth, offsets along x, base motion along x; the depth only
-        scales mass and inertia), so every current scenario is supported. A
-        Block or Stack field this adapter does not know to be planar is
-        refused when it is set (truthy), rather than silently ignored.
+        Every field the geometry model has today is planar (bodies and supports
+        are x–z polygons centred in depth, poses are x, z and an angle about +y;
+        the depth only scales mass and inertia), so every current geometry is
+        supported; a base motion along y is refused by ``base_axes``. A field of
+        the geometry, a body or a support that this adapter does not know to be
+        planar (one a subclass adds) is refused when it is set (truthy), rather
+        than silently ignored.
         """
+        geo = scenario.geometry
         c = scenario.contact
-        if scenario.is_assembly and c.block_friction == 0.0 < c.friction:
+        if geo.column is None and c.block_friction == 0.0 < c.friction:
             raise UnsupportedScenario(
                 "pymunk multiplies two shapes' frictions, so an interface friction of 0 "
-                f"with μ = {c.friction:g} on the base cannot both hold in an assembly, whose "
-                "blocks touch each other and the base")
-        for obj, known in ((scenario.stack, _PLANAR_STACK_FIELDS),) + tuple(
-            (b, _PLANAR_BLOCK_FIELDS) for b in scenario.blocks
-        ):
+                f"with μ = {c.friction:g} on the base cannot both hold in this geometry, "
+                "whose blocks may touch each other and the base at once")
+        for obj in (geo, *geo.bodies, *geo.supports):
+            known = next((v for k, v in _PLANAR_FIELDS.items() if isinstance(obj, k)),
+                         frozenset())
             for f in dataclasses.fields(obj):
                 if f.name not in known and _is_set(getattr(obj, f.name)):
                     raise UnsupportedScenario(
@@ -216,40 +241,39 @@ class PymunkEngine(Engine):
         space.sleep_time_threshold = math.inf  # never sleep
         # Chipmunk multiplies the two shapes' coefficients: the square root on
         # every shape gives each contact pair exactly the scenario's values
-        # (an interface friction: the base carries μ, a stack's blocks alternate 1 and
-        # μ_if; an assembly's blocks touch blocks and the base at once: each √μ_if)
+        # (an interface friction: the base carries μ, a column's blocks alternate 1 and
+        # μ_if; other geometries' blocks touch blocks and the base at once: each √μ_if)
+        geo = scenario.geometry
         c = scenario.contact
-        if scenario.is_assembly:
-            mus = assembly_frictions(c.friction, c.block_friction, scenario.n_blocks)
-        elif c.block_friction == c.friction:
-            mus = [math.sqrt(c.friction)] * (scenario.n_blocks + 1)
-        else:
-            mus = [c.friction] + [1.0 if i % 2 == 0 else c.block_friction
-                                  for i in range(scenario.n_blocks)]
+        mus = product_frictions(geo, c.friction, c.block_friction)
         e = math.sqrt(scenario.contact.restitution)
 
-        exc = scenario.excitation
-        h_tot = scenario.stack.total_height
+        drive = self.drive
+        h_tot = geo.total_height
         w_max = max(b.width for b in scenario.blocks)
-        t_end = min(exc.end_time, scenario.duration) if not exc.is_free else 0.0
-        n_drive = int(math.ceil(t_end / dt)) + 2 if t_end > 0 else 0
+        n_drive = drive.steps_until_stop(dt) + 2 if drive.stop > 0 else 0
         if n_drive:
-            t0 = np.arange(n_drive) * dt
-            u_start = np.asarray(exc.displacement(t0), dtype=float)
-            v_mid = np.asarray(exc.velocity(t0 + 0.5 * dt), dtype=float)
-            u_max = float(np.max(np.abs(u_start)))
+            t0 = drive.grid(dt, n_drive)
+            # x and z (pymunk's x and y) of the base
+            u_start = drive.displacement(t0)[:, ::2]
+            v_mid = drive.velocity(drive.grid(dt, n_drive, phase=0.5))[:, ::2]
+            u_max = float(np.max(np.abs(u_start[:, 0])))
         else:
-            u_start = v_mid = np.zeros(1)
+            u_start = v_mid = np.zeros((1, 2))
             u_max = 0.0
         self._u_start, self._v_mid = u_start, v_mid
         # plain floats for the stepping loop (cheaper to slice and pass than NumPy scalars)
-        self._u_list, self._v_list = u_start.tolist(), v_mid.tolist()
+        self._u_list, self._v_list = u_start[:, 0].tolist(), v_mid[:, 0].tolist()
+        if "z" in drive.axes:
+            self._uz_list, self._vz_list = u_start[:, 1].tolist(), v_mid[:, 1].tolist()
+        else:
+            self._uz_list = self._vz_list = None
 
-        # base: wide enough for any toppled block plus the base travel, and
-        # thick enough that nothing tunnels through it
+        # base: wide enough for any toppled block plus the base travel (and, for a
+        # geometry other than a column, the blocks' spread along x), and thick
+        # enough that nothing tunnels through it
         half = 2.0 * (h_tot + w_max) + u_max + 1.0
-        if scenario.is_assembly:  # wide scenes: the blocks' spread along x too
-            half += scenario.stack.reach + scenario.stack.size
+        half += geo.room
         thick = max(1.0, 0.5 * h_tot)
         base = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         base.position = (0.0, 0.0)
@@ -258,18 +282,17 @@ class PymunkEngine(Engine):
         base_shape.friction = mus[0]
         base_shape.elasticity = e
         space.add(base, base_shape)
-        # an assembly's fixed supports: more shapes of the base body (the base is at
+        # the fixed supports: more shapes of the base body (the base is at
         # x = 0 now, so base coordinates are world coordinates)
-        for sup in getattr(scenario.stack, "supports", ()):
+        for sup in geo.supports:
             shape = pymunk.Poly(base, [tuple(map(float, v)) for v in sup.vertices], radius=0.0)
             shape.friction = mus[0]
             shape.elasticity = e
             space.add(shape)
 
-        centroids, th0 = scenario.initial_poses()
         blocks = []
-        for blk, (cx, cz), th, mu in zip(scenario.blocks, centroids,
-                                         th0 + scenario.block_angles, mus[1:], strict=True):
+        for blk, (cx, cz, th), mu in zip(scenario.blocks, scenario.initial_poses(), mus[1:],
+                                         strict=True):
             body = pymunk.Body(float(blk.m), float(blk.inertia[1]))
             body.position = (float(cx), float(cz))
             body.angle = -float(th)  # pymunk's angle is counter-clockwise: θ = −angle
@@ -295,28 +318,47 @@ class PymunkEngine(Engine):
         return dt
 
     def _drive_base(self, t: float, dt: float) -> None:
-        i = min(int(round(t / self._dt)), self._v_mid.size - 1)  # past the motion: hold
+        i = min(int(round(t / self._dt)), len(self._v_mid) - 1)  # past the motion: hold
         # exact position at the step start (no drift), midpoint velocity for the step
-        self._base.position = (float(self._u_start[i]), 0.0)
-        self._base.velocity = (float(self._v_mid[i]), 0.0)
+        self._base.position = tuple(self._u_start[i].tolist())
+        self._base.velocity = tuple(self._v_mid[i].tolist())
+
+    def _series(self, i0: int, n: int) -> tuple[list[float], ...]:
+        """The base's u_x, u̇_x, u_z, u̇_z (z: empty while still) for steps i0 … i0 + n − 1."""
+        if i0 + n <= len(self._v_list):
+            us, vs = self._u_list[i0:i0 + n], self._v_list[i0:i0 + n]
+            if self._uz_list is None or self._vz_list is None:
+                return us, vs, [], []
+            return us, vs, self._uz_list[i0:i0 + n], self._vz_list[i0:i0 + n]
+        # steps past the precomputed motion repeat its last, still, value
+        idx = np.minimum(np.arange(i0, i0 + n), len(self._v_mid) - 1)
+        u, v = self._u_start[idx], self._v_mid[idx]
+        if self._uz_list is None:
+            return u[:, 0].tolist(), v[:, 0].tolist(), [], []
+        return u[:, 0].tolist(), v[:, 0].tolist(), u[:, 1].tolist(), v[:, 1].tolist()
+
+    def _drive_steps(self, us: list[float], vs: list[float], uzs: list[float],
+                     vzs: list[float]) -> None:
+        """One step per entry of ``us``, the base set before each (z too if ``uzs``)."""
+        set_pos, set_vel, bptr = self._set_pos, self._set_vel, self._base_ptr
+        step, ptr, h = self._step, self._space_ptr, self._dt
+        if not uzs:  # the base still along z: the horizontal-only loop
+            for u, v in zip(us, vs, strict=True):
+                set_pos(bptr, (u, 0.0))
+                set_vel(bptr, (v, 0.0))
+                step(ptr, h)
+            return
+        for u, v, uz, vz in zip(us, vs, uzs, vzs, strict=True):
+            set_pos(bptr, (u, uz))
+            set_vel(bptr, (v, vz))
+            step(ptr, h)
 
     def _advance_driven(self, t0: float, n: int, dt: float) -> None:
         # the same as _drive_base + _advance(1) per step, in one tight loop
         if self._space_ptr is None:  # pragma: no cover - other pymunk layouts
             super()._advance_driven(t0, n, dt)
             return
-        set_pos, set_vel, bptr = self._set_pos, self._set_vel, self._base_ptr
-        step, ptr, h = self._step, self._space_ptr, self._dt
-        i0 = int(round(t0 / h))
-        if i0 + n <= len(self._v_list):
-            us, vs = self._u_list[i0:i0 + n], self._v_list[i0:i0 + n]
-        else:  # steps past the precomputed motion repeat its last, still, value
-            idx = np.minimum(np.arange(i0, i0 + n), self._v_mid.size - 1)
-            us, vs = self._u_start[idx].tolist(), self._v_mid[idx].tolist()
-        for u, v in zip(us, vs, strict=True):
-            set_pos(bptr, (u, 0.0))
-            set_vel(bptr, (v, 0.0))
-            step(ptr, h)
+        self._drive_steps(*self._series(int(round(t0 / self._dt)), n))
 
     def _sample_free(self, out: np.ndarray, k: int) -> None:
         """All ``len(out)`` samples in one loop over locally bound C calls."""
@@ -342,24 +384,15 @@ class PymunkEngine(Engine):
         if self._space_ptr is None:  # pragma: no cover - other pymunk layouts
             super()._sample_driven(out, step0, k, dt)
             return
-        set_pos, set_vel, bptr = self._set_pos, self._set_vel, self._base_ptr
-        step, ptr, h = self._step, self._space_ptr, self._dt
         get_pos, get_angle, cos, sin = self._get_pos, self._get_angle, math.cos, math.sin
-        bps = self._body_ptrs
+        bps, drive = self._body_ptrs, self._drive_steps
         m = out.shape[0]
         n = m * k
-        if step0 + n <= len(self._v_list):
-            us, vs = self._u_list[step0:step0 + n], self._v_list[step0:step0 + n]
-        else:  # steps past the precomputed motion repeat its last, still, value
-            idx = np.minimum(np.arange(step0, step0 + n), self._v_mid.size - 1)
-            us, vs = self._u_start[idx].tolist(), self._v_mid[idx].tolist()
+        us, vs, uzs, vzs = self._series(step0, n)
         rows: list[tuple[float, ...]] = []
         add = rows.append
         for j in range(0, n, k):
-            for u, v in zip(us[j:j + k], vs[j:j + k], strict=True):
-                set_pos(bptr, (u, 0.0))
-                set_vel(bptr, (v, 0.0))
-                step(ptr, h)
+            drive(us[j:j + k], vs[j:j + k], uzs[j:j + k], vzs[j:j + k])
             for bp in bps:
                 p = get_pos(bp)
                 half = -0.5 * get_angle(bp)
@@ -367,7 +400,7 @@ class PymunkEngine(Engine):
         out.reshape(-1, 7)[:] = rows
 
     def _fix_base(self) -> bool:
-        self._base.position = (float(self._u_start[-1]), 0.0)
+        self._base.position = tuple(self._u_start[-1].tolist())
         self._base.velocity = (0.0, 0.0)
         return True
 
@@ -408,4 +441,5 @@ class PymunkEngine(Engine):
         self._base = self._base_ptr = None
         self._set_pos = self._set_vel = self._get_pos = self._get_angle = None
         self._u_list, self._v_list = [], []
+        self._uz_list = self._vz_list = None
         self._blocks = []

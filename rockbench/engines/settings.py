@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import enum
 import hashlib
 import json
 import math
@@ -13,11 +14,65 @@ from typing import Any
 
 from rockbench.errors import RockbenchError
 
-__all__ = ["EngineSettings", "SettingsError", "parse_set_options"]
+__all__ = ["EngineSettings", "SettingsError", "KnobRole", "parse_set_options"]
 
 
 class SettingsError(RockbenchError, ValueError):
     """An engine knob does not exist or its value has the wrong type."""
+
+
+class KnobRole(enum.Enum):
+    """What a knob does, as an engine declares it (``Engine.knob_roles``).
+
+    Studies and the command line ask the engine which knob plays a role instead
+    of guessing from names: the tuner and the convergence ladders refine the
+    knobs with a direction (:attr:`finer`), the paper's sensitivity study varies
+    the knob of each of its Table 2 roles.
+    """
+
+    TIME_STEP = "time step"
+    ITERATIONS = "solver iterations"
+    SUBSTEPS = "sub-steps per frame"
+    FRAME_RATE = "frame rate"
+    TOLERANCE = "solver tolerance"
+    CONTACT_SOFTNESS = "contact softness"
+    CONTACT_STIFFNESS = "contact stiffness"
+    CONTACT_POINTS = "contact points"
+    COLLISION_SHAPE = "collision shape"
+    COLLISION_MARGIN = "collision margin"
+    CONTACT_SLOP = "contact slop"
+
+    @property
+    def finer(self) -> str | None:
+        """``"smaller"`` or ``"larger"``: which values resolve the physics more finely
+        (at a higher cost); None for a choice or a knob without such a direction."""
+        if self in (KnobRole.TIME_STEP, KnobRole.TOLERANCE, KnobRole.CONTACT_SOFTNESS):
+            return "smaller"
+        if self in (KnobRole.ITERATIONS, KnobRole.SUBSTEPS, KnobRole.FRAME_RATE,
+                    KnobRole.CONTACT_STIFFNESS, KnobRole.CONTACT_POINTS):
+            return "larger"
+        return None
+
+    def refine(self, value: Any, level: int) -> Any:
+        """``value`` refined ``level`` times by a factor of 2 in the :attr:`finer` direction.
+
+        A time step, tolerance or softness is halved, iterations, rates and
+        stiffnesses doubled; ``n`` sub-steps per frame become (n + 1) · 2 − 1, so that
+        the step they set halves.
+
+        Raises
+        ------
+        ValueError
+            A role without a direction, or a value that is not a number.
+        """
+        if self.finer is None or isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"a {self.value} of {value!r} cannot be refined")
+        k = 2 ** level
+        if self is KnobRole.SUBSTEPS:
+            return (int(value) + 1) * k - 1
+        if self.finer == "smaller":
+            return value / k
+        return type(value)(value * k)
 
 
 _TRUE = {"1", "true", "yes", "on"}
@@ -96,7 +151,7 @@ class EngineSettings:
         clean = {}
         for key, val in overrides.items():
             if key not in names:
-                raise SettingsError(f"{type(self).__qualname__} has no knob {key!r}; "
+                raise SettingsError(f"no knob {key!r}; "
                                     f"knobs: {', '.join(sorted(names))}")
             clean[key] = _coerce(val, hints[key], key)
         try:

@@ -33,17 +33,18 @@ import numpy as np
 
 from rockbench import analytic
 from rockbench.engines.base import Engine
-from rockbench.metrics import impact_times, max_error
-from rockbench.scenarios import Block, Scenario, SinePulse, Stack, scenario_to_dict
-from rockbench.scenarios.assembly import (
-    Assembly,
+from rockbench.geometry import (
+    Block,
+    Body,
+    Geometry,
     Prism,
     Support,
-    penetration,
-    rotate,
     running_bond_wall,
     voussoir_arch,
 )
+from rockbench.geometry.polygon import penetration, rotate
+from rockbench.metrics import impact_times, max_error
+from rockbench.scenarios import Scenario, SinePulse, scenario_to_dict
 from rockbench.scenarios.catalog import SINGLE2, STACK2
 from rockbench.trajectory import Status, Trajectory
 
@@ -84,8 +85,13 @@ class Tolerances:
     penetration: float = 1e-5
 
 
-def _scenario(name: str, stack: Stack | Block, **kw: Any) -> Scenario:
-    return Scenario(name=f"conformance-{name}", stack=stack, **kw)
+def _scenario(name: str, geometry: Geometry | Block, **kw: Any) -> Scenario:
+    return Scenario(name=f"conformance-{name}", geometry=geometry, **kw)
+
+
+def _lam(scenario: Scenario) -> float:
+    """The scenario's normalising λ."""
+    return analytic.critical_angle(scenario.geometry)
 
 
 def _run(engine: Engine, scenario: Scenario, settings: Any) -> Trajectory:
@@ -100,7 +106,7 @@ def check_rest(engine: Engine, settings: Any = None, tol: Tolerances = Tolerance
     """An upright block on a still base stays upright and in place (no drift, no creep)."""
     sc = _scenario("rest", B2, duration=2.0, output_rate=200.0)
     traj = _run(engine, sc, settings)
-    lam = sc.critical_angle
+    lam = _lam(sc)
     assert traj.status is Status.OK, f"resting block ended {traj.status}: {traj.message}"
     worst = float(np.max(np.abs(traj.theta))) / lam
     assert worst <= tol.rest, f"resting block rotated to {worst:.2e} λ (limit {tol.rest:.0e} λ)"
@@ -122,7 +128,7 @@ def check_free_rocking(engine: Engine, settings: Any = None,
         f"impact times {np.round(t_eng, 4)} vs Housner {np.round(t_ref, 4)}: "
         f"errors {np.round(rel * 100, 2)} % (limit {tol.impact_time * 100:g} %)"
     )
-    err = max_error(traj, ref, sc.critical_angle, t_end=float(t_ref[2]) + 0.05)
+    err = max_error(traj, ref, _lam(sc), t_end=float(t_ref[2]) + 0.05)
     assert err <= tol.free_error, (
         f"max |θ − θ_Housner| = {err:.4f} λ over 3 impacts (limit {tol.free_error} λ)"
     )
@@ -142,7 +148,7 @@ def check_subthreshold(engine: Engine, settings: Any = None,
     )
     # the block rides with the base: it must have moved by the pulse's displacement
     moved = traj.x[-1, 0] - traj.x[0, 0]
-    expect = float(sc.excitation.displacement(sc.duration))
+    expect = float(sc.motion.x.displacement(sc.duration))
     assert abs(moved - expect) <= 0.05 * abs(expect) + 1e-4, (
         f"block moved {moved:.4g} m, the base {expect:.4g} m: the base does not drag it"
     )
@@ -206,7 +212,7 @@ def check_stack_rest(engine: Engine, settings: Any = None,
     """The paper's chamfered two-block stack stays at rest on a still base."""
     sc = _scenario("stack-rest", STACK2, duration=1.0, output_rate=200.0)
     traj = _run(engine, sc, settings)
-    worst = float(np.max(np.abs(traj.theta))) / sc.critical_angle
+    worst = float(np.max(np.abs(traj.theta))) / _lam(sc)
     assert traj.status is Status.OK and worst <= tol.rest, (
         f"resting stack: status {traj.status}, max |θ| = {worst:.2e} λ"
     )
@@ -227,28 +233,28 @@ def check_forced_peak(engine: Engine, settings: Any = None,
     )
 
 
-def _assembly_scene(prisms: bool = True) -> Assembly:
+def _assembly_scene(prisms: bool = True) -> Geometry:
     """A small assembly of every kind of body: a block on a support, a block on the base,
     a trapezoidal prism on top of it (asymmetric, so that mirroring it is a real test).
 
     Without ``prisms`` (an engine that builds rectangular blocks only) the top body is a
     box standing off-centre on its block, which keeps the scene asymmetric.
     """
-    top: Block | Prism = Prism(((0.1, 0.9), (0.4, 0.9), (0.35, 1.2), (0.15, 1.2)), 0.3,
+    top: Body = Prism(((0.1, 0.9), (0.4, 0.9), (0.35, 1.2), (0.15, 1.2)), 0.3,
                                density=2000.0)
     top_pose = (0.0, 0.0, 0.0)
     if not prisms:
         top, top_pose = Block(0.2, 0.3, 0.3, density=2000.0), (0.3, 1.05, 0.0)
-    return Assembly(
+    return Geometry(
         (Block(0.4, 0.3, 0.6, density=2000.0), Block(0.3, 0.3, 0.9, density=2000.0), top),
         ((-0.3, 0.6, 0.0), (0.25, 0.45, 0.0), top_pose),
         (Support.rectangle(-0.5, -0.1, 0.0, 0.3),))
 
 
-def _assembly_pulse(scene: Assembly, factor: float = 2.0) -> SinePulse:
+def _assembly_pulse(scene: Geometry, factor: float = 2.0) -> SinePulse:
     """A 3 Hz one-sine pulse peaking at ``factor`` × the scene's collapse acceleration."""
     f = 3.0
-    alpha = math.tan(scene.critical_angle())
+    alpha = math.tan(analytic.critical_angle(scene))
     return SinePulse(f, factor * 9.81 * alpha / (2 * math.pi * f) ** 2)
 
 
@@ -269,10 +275,10 @@ def check_assembly_rest(engine: Engine, settings: Any = None,
     for sc in _rest_assemblies(engine):
         traj = _run(engine, sc, settings)
         assert traj.status is Status.OK, f"{sc.name}: status {traj.status} ({traj.message})"
-        turn = float(np.max(np.abs(traj.theta - traj.theta[0]))) / sc.critical_angle
+        turn = float(np.max(np.abs(traj.theta - traj.theta[0]))) / _lam(sc)
         drift = float(np.max(np.hypot(traj.x - traj.x[0], traj.z - traj.z[0])))
         assert turn <= tol.rest, f"{sc.name}: a block turned by {turn:.2e} λ at rest"
-        size = sc.stack.size
+        size = sc.geometry.size
         assert drift <= 1e-3 * size, f"{sc.name}: a block drifted {drift:.2e} m at rest"
 
 
@@ -281,9 +287,9 @@ def check_assembly_penetration(engine: Engine, settings: Any = None,
     """At rest no two bodies of an assembly (blocks, supports, base) overlap beyond tol."""
     for sc in _rest_assemblies(engine, duration=1.0):
         traj = _run(engine, sc, settings)
-        asm = sc.stack
+        asm = sc.geometry
         polys = [c + rotate(b.profile(), th) for b, c, th in zip(
-            asm.blocks, np.column_stack([traj.x[-1], traj.z[-1]]), traj.theta[-1], strict=True)]
+            asm.bodies, np.column_stack([traj.x[-1], traj.z[-1]]), traj.theta[-1], strict=True)]
         fixed = [s.array for s in asm.supports]
         worst, where = 0.0, ""
         for i, p in enumerate(polys):
@@ -313,14 +319,14 @@ def check_assembly_mirror_symmetry(engine: Engine, settings: Any = None,
                                    tol: Tolerances = Tolerances()) -> None:
     """An assembly and its mirror image under a mirrored pulse rock as mirror images."""
     a, b, sc = _mirrored_runs(engine, settings)
-    lam = sc.critical_angle
+    lam = _lam(sc)
     peak = float(np.max(np.abs(a.theta))) / lam
     assert peak > 0.05, f"the pulse should rock the scene, max |θ| = {peak:.2e} λ"
     n = min(a.t.size, b.t.size)
     asym = float(np.max(np.abs(a.theta[:n] + b.theta[:n]))) / lam
     shift = float(np.max(np.abs(a.x[:n] + b.x[:n])))
     assert asym <= tol.mirror, f"mirrored assemblies' rotations differ by {asym:.2e} λ"
-    assert shift <= tol.mirror * sc.stack.size, (
+    assert shift <= tol.mirror * sc.geometry.size, (
         f"mirrored assemblies' x differ by {shift:.2e} m")
 
 
