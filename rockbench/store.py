@@ -2,21 +2,29 @@
 
 Every study (``compare``, ``matrix``, ``sweep``, ``tune``, ...) records each
 finished run here: one row per run in table ``runs``: scenario name and content
-hash, engine, method label, preset and variation, engine version, requested and
-effective settings, status, message, the run's
+hash, engine, method label, preset and variation, engine version, requested,
+resolved and effective settings, status, message, the run's
 :class:`~rockbench.evaluation.RunMetrics` (JSON), wall and CPU time, the
-trajectory file when the study keeps one (path relative to the store), machine,
-timestamp (UTC, ISO 8601), rockbench version, the command that produced it
+trajectory file when the study keeps one, machine, timestamp (UTC, ISO 8601),
+rockbench's release and the code version that made it
+(:func:`rockbench.provenance.code_version`), the command that produced it
 (``kind``) and a session id. Rows are committed one by one, so an interrupted
 study loses nothing and ``--resume`` can skip runs already done
 (:meth:`Store.find`).
+
+A run is reused only when its identity matches in full: the scenario's content,
+the engine and its library version, the *resolved* settings (the preset's values,
+not its name: a preset whose value changed reruns) and the code version; a
+row written by older code (schema 2, or another code version) is never reused
+and is shown as made by that code.
 
 A file that exists and is not a rockbench store (another application's SQLite
 database, or not SQLite at all) is refused and never modified: the store marks
 its files with a SQLite ``application_id``.
 
 Table ``refs`` caches analytic reference trajectories by scenario content hash
-and rockbench version (the analytic models are versioned with rockbench).
+and the code version of the references (a change to the analytic code recomputes
+them).
 
 The database is opened in WAL mode; it is safe to read (``rockbench history``)
 while a matrix is writing.
@@ -40,25 +48,28 @@ from typing import Any
 
 import numpy as np
 
-import rockbench
+from rockbench import provenance
 from rockbench.errors import RockbenchError
 from rockbench.evaluation import RunMetrics
 from rockbench.method import Method
-from rockbench.scenarios import Scenario, scenario_to_dict
+from rockbench.scenarios import Record, Scenario, scenario_to_dict
 from rockbench.trajectory import Status, Trajectory, write_npz
 
 __all__ = ["Store", "RunRecord", "StoreError", "scenario_hash", "settings_key", "machine",
-           "jsonable", "DEFAULT_DB"]
+           "jsonable", "DEFAULT_DB", "RunIdentity"]
 
 #: Default database file (in the current directory).
 DEFAULT_DB = "rockbench.db"
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 #: SQLite ``application_id`` of rockbench stores ("RkBn").
 APPLICATION_ID = 0x526B426E
-#: Columns added by schema 2 (a schema-1 store is upgraded in place).
-_V2_COLUMNS = (("method", "TEXT NOT NULL DEFAULT ''"), ("preset", "TEXT NOT NULL DEFAULT ''"),
-               ("variation", "TEXT NOT NULL DEFAULT ''"), ("cpu_time", "REAL"),
-               ("trajectory", "TEXT NOT NULL DEFAULT ''"))
+#: Columns added since schema 1 (an older store is upgraded in place; its rows keep
+#: empty values there, so no new code takes them for its own).
+_ADDED_COLUMNS = (("method", "TEXT NOT NULL DEFAULT ''"), ("preset", "TEXT NOT NULL DEFAULT ''"),
+                  ("variation", "TEXT NOT NULL DEFAULT ''"), ("cpu_time", "REAL"),
+                  ("trajectory", "TEXT NOT NULL DEFAULT ''"),
+                  ("resolved_key", "TEXT NOT NULL DEFAULT ''"),
+                  ("code_version", "TEXT NOT NULL DEFAULT ''"))
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT);
@@ -85,9 +96,10 @@ CREATE TABLE IF NOT EXISTS runs (
     preset TEXT NOT NULL DEFAULT '',
     variation TEXT NOT NULL DEFAULT '',
     cpu_time REAL,
-    trajectory TEXT NOT NULL DEFAULT ''
+    trajectory TEXT NOT NULL DEFAULT '',
+    resolved_key TEXT NOT NULL DEFAULT '',
+    code_version TEXT NOT NULL DEFAULT ''
 );
-CREATE INDEX IF NOT EXISTS runs_cell ON runs (scenario_hash, engine, settings_key);
 CREATE INDEX IF NOT EXISTS runs_name ON runs (scenario, engine);
 CREATE TABLE IF NOT EXISTS refs (
     scenario_hash TEXT NOT NULL,
@@ -130,22 +142,56 @@ def jsonable(obj: Any) -> Any:
 def scenario_hash(scenario: Scenario) -> str:
     """Content hash of a scenario: everything simulated, not its name or description.
 
-    Records are hashed by their samples, not their file name.
+    Records are hashed by their samples too, not only their file name.
     """
     data = scenario_to_dict(scenario)
     data.pop("name", None)
     data.pop("description", None)
     h = hashlib.sha256(_canonical(data).encode())
-    exc = scenario.excitation
-    if not exc.is_free:
-        t = np.linspace(0.0, scenario.duration, 2001)
-        h.update(np.round(np.asarray(exc.acceleration(t), float), 12).tobytes())
+    for motion in scenario.motion.components:
+        if isinstance(motion, Record):
+            h.update(np.asarray(motion.times, float).tobytes())
+            h.update(np.asarray(motion.accelerations, float).tobytes())
     return h.hexdigest()[:16]
 
 
 def settings_key(settings: Mapping[str, Any]) -> str:
-    """Hash of the requested settings mapping (order-independent)."""
+    """Hash of a settings mapping (order-independent)."""
     return hashlib.sha256(_canonical(dict(settings)).encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class RunIdentity:
+    """What makes two runs the same run: a stored run is reused only if all of it matches.
+
+    Attributes
+    ----------
+    scenario_hash : str
+        :func:`scenario_hash` of what is simulated.
+    engine, engine_version : str
+        The engine and its library's version.
+    resolved_key : str
+        :func:`settings_key` of the settings the run resolves to (every knob's
+        value, whatever preset or override named it).
+    code_version : str
+        :func:`rockbench.provenance.code_version` of the code that runs it.
+    variation : str
+        A study's named variation ('' for the main runs).
+    """
+
+    scenario_hash: str
+    engine: str
+    engine_version: str
+    resolved_key: str
+    code_version: str
+    variation: str = ""
+
+    @classmethod
+    def of(cls, scenario: Scenario, method: Method, *, engine_version: str,
+           resolved: Mapping[str, Any], scope: str = "run") -> RunIdentity:
+        """The identity of running ``method`` (resolved to ``resolved``) on ``scenario`` now."""
+        return cls(scenario_hash(scenario), method.engine, engine_version,
+                   settings_key(resolved), provenance.code_version(scope), method.variation)
 
 
 def machine() -> str:
@@ -189,6 +235,12 @@ class RunRecord:
     machine: str
     timestamp: str
     rockbench_version: str
+    code_version: str
+
+    @property
+    def made_by(self) -> str:
+        """The code that made the run: its code version, or the release of older code."""
+        return self.code_version or f"rockbench {self.rockbench_version} (older code)"
 
 
 def _metrics(text: str) -> RunMetrics | None:
@@ -201,7 +253,7 @@ def _metrics(text: str) -> RunMetrics | None:
 _COLUMNS = ("id, session, kind, suite, scenario, scenario_hash, engine, method, preset, "
             "variation, engine_version, settings, settings_key, effective_settings, status, "
             "message, metrics, wall_time, cpu_time, trajectory, machine, timestamp, "
-            "rockbench_version")
+            "rockbench_version, code_version")
 
 
 def _check_foreign(path: Path, *, reader: bool) -> None:
@@ -284,20 +336,39 @@ class Store:
             raise StoreError(f"{self.path}: not a usable results database ({exc})") from None
 
     def _upgrade(self) -> None:
+        """Bring the store to this schema; a store already there is not written to (a
+        reader such as ``rockbench history`` then never waits for a writer's lock)."""
+        current = self.db.execute("SELECT name FROM sqlite_master WHERE type = 'table' AND "
+                                  "name = 'meta'").fetchone() is not None and \
+            self.db.execute("SELECT value FROM meta WHERE key='schema'").fetchone() == \
+            (str(SCHEMA_VERSION),) and \
+            self.db.execute("PRAGMA application_id").fetchone()[0] == APPLICATION_ID
+        if current:
+            return
         self.db.executescript(_SCHEMA)
         row = self.db.execute("SELECT value FROM meta WHERE key='schema'").fetchone()
         if row is not None and int(row[0]) > SCHEMA_VERSION:
             raise StoreError(f"{self.path}: results store schema {row[0]} is newer than "
                              f"this rockbench ({SCHEMA_VERSION}); upgrade rockbench")
-        if row is not None and int(row[0]) < 2:
-            have = {r[1] for r in self.db.execute("PRAGMA table_info(runs)")}
-            for name, decl in _V2_COLUMNS:
-                if name not in have:
-                    self.db.execute(f"ALTER TABLE runs ADD COLUMN {name} {decl}")
+        have = {r[1] for r in self.db.execute("PRAGMA table_info(runs)")}
+        for name, decl in _ADDED_COLUMNS:
+            if name not in have:
+                self.db.execute(f"ALTER TABLE runs ADD COLUMN {name} {decl}")
+        self.db.execute("CREATE INDEX IF NOT EXISTS runs_identity ON runs "
+                        "(scenario_hash, engine, resolved_key, code_version)")
         self.db.execute("INSERT OR REPLACE INTO meta VALUES ('schema', ?)",
                         (str(SCHEMA_VERSION),))
         self.db.execute(f"PRAGMA application_id = {APPLICATION_ID}")
         self.db.commit()
+
+    @property
+    def archive(self) -> Path | None:
+        """The folder beside the store where studies keep run trajectories
+        (``rockbench.db`` → ``rockbench-runs/``); None for an in-memory store."""
+        if self.path == ":memory:":
+            return None
+        p = Path(self.path)
+        return p.parent / f"{p.stem}-runs"
 
     # ------------------------------------------------------------------ lifecycle
     def close(self) -> None:
@@ -317,6 +388,7 @@ class Store:
         method: Method,
         traj: Trajectory,
         metrics: RunMetrics,
+        identity: RunIdentity,
         *,
         kind: str,
         suite: str = "",
@@ -334,6 +406,8 @@ class Store:
             The result (effective settings).
         metrics : RunMetrics
             From :func:`rockbench.evaluation.evaluate_run`.
+        identity : RunIdentity
+            What makes it this run (:meth:`find` matches it).
         kind : str
             The study that ran it (``compare``, ``matrix``, ``sweep``, ``tune``...).
         suite : str
@@ -346,39 +420,30 @@ class Store:
             "INSERT INTO runs (session, kind, suite, scenario, scenario_hash, engine, method, "
             "preset, variation, engine_version, settings, settings_key, effective_settings, "
             "status, message, metrics, wall_time, cpu_time, trajectory, machine, timestamp, "
-            "rockbench_version) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, "
-            "?, ?, ?, ?)",
-            (self.session, kind, suite, scenario.name, scenario_hash(scenario), method.engine,
-             method.label, method.preset, method.variation, metrics.engine_version,
+            "rockbench_version, resolved_key, code_version) VALUES (?, ?, ?, ?, ?, ?, ?, ?, "
+            "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            (self.session, kind, suite, scenario.name, identity.scenario_hash, method.engine,
+             method.label, method.preset, method.variation, identity.engine_version,
              _canonical(settings), settings_key(settings), _canonical(traj.settings),
              metrics.status.value, metrics.message, _canonical(metrics.to_json()),
              metrics.wall_time, metrics.cpu_time, trajectory, self.machine, _now(),
-             rockbench.__version__),
+             provenance.RELEASE, identity.resolved_key, identity.code_version),
         )
         self.db.commit()
         return int(cur.lastrowid or 0)
 
-    def find(
-        self, scenario: Scenario, method: Method, *,
-        engine_version: str | None = None, rockbench_version: str | None = None,
-    ) -> RunRecord | None:
-        """The latest stored run of a cell whose metrics can be read, or None.
+    def find(self, identity: RunIdentity) -> RunRecord | None:
+        """The latest stored run of exactly this identity whose metrics can be read, or None.
 
-        A cell is the scenario content, the engine, the requested settings, the
-        variation and, when given, the engine and rockbench versions
-        (``--resume`` passes the current ones, so upgrading either reruns it).
+        Every part must match (:class:`RunIdentity`): a run made by other code, at
+        other resolved settings or with another engine version is not found.
         """
         sql = (f"SELECT {_COLUMNS} FROM runs WHERE scenario_hash = ? AND engine = ? "
-               "AND settings_key = ? AND variation = ?")
-        args: list[Any] = [scenario_hash(scenario), method.engine, settings_key(method.settings),
-                           method.variation]
-        if engine_version is not None:
-            sql += " AND engine_version = ?"
-            args.append(engine_version)
-        if rockbench_version is not None:
-            sql += " AND rockbench_version = ?"
-            args.append(rockbench_version)
-        for row in self.db.execute(sql + " ORDER BY id DESC LIMIT 20", args):
+               "AND engine_version = ? AND resolved_key = ? AND code_version = ? "
+               "AND variation = ? ORDER BY id DESC LIMIT 20")
+        args = (identity.scenario_hash, identity.engine, identity.engine_version,
+                identity.resolved_key, identity.code_version, identity.variation)
+        for row in self.db.execute(sql, args):
             rec = self._row(row)
             if rec.metrics is not None:
                 return rec
@@ -414,15 +479,15 @@ class Store:
             settings=json.loads(r[11]), settings_key=r[12], effective_settings=json.loads(r[13]),
             status=Status(r[14]), message=r[15], metrics=_metrics(r[16]), wall_time=r[17],
             cpu_time=r[18], trajectory=r[19], machine=r[20], timestamp=r[21],
-            rockbench_version=r[22],
+            rockbench_version=r[22], code_version=r[23],
         )
 
     # ------------------------------------------------------------------ references
     def reference(self, scenario: Scenario) -> Trajectory | None:
-        """The cached analytic reference of ``scenario`` for this rockbench version."""
+        """The cached analytic reference of ``scenario`` made by the current reference code."""
         row = self.db.execute(
             "SELECT data, meta FROM refs WHERE scenario_hash = ? AND version = ?",
-            (scenario_hash(scenario), rockbench.__version__),
+            (scenario_hash(scenario), provenance.code_version("reference")),
         ).fetchone()
         if row is None:
             return None
@@ -451,7 +516,8 @@ class Store:
         meta = traj.metadata()
         self.db.execute(
             "INSERT OR REPLACE INTO refs VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
-            (scenario_hash(scenario), rockbench.__version__, scenario.name, traj.status.value,
+            (scenario_hash(scenario), provenance.code_version("reference"), scenario.name,
+             traj.status.value,
              traj.message, float(traj.wall_time), buf.getvalue(), _canonical(meta), _now()),
         )
         self.db.commit()

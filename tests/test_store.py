@@ -2,25 +2,36 @@
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import sqlite3
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import rockbench
+from rockbench import provenance
+from rockbench.analytic import critical_angle
+from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
+from rockbench.campaign.predictability import DEFAULT_MEMBERS
 from rockbench.cli import main
 from rockbench.engines import register, unregister
-from rockbench.evaluation import evaluate_run
+from rockbench.evaluation import RunMetrics, evaluate_run
 from rockbench.method import Method
 from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Block, Scenario, SinePulse, save_scenario
-from rockbench.store import Store, StoreError, jsonable, scenario_hash, settings_key
+from rockbench.store import (
+    RunIdentity,
+    Store,
+    StoreError,
+    jsonable,
+    scenario_hash,
+    settings_key,
+)
 from rockbench.studies.matrix import run_matrix
-from rockbench.studies.predictability import DEFAULT_MEMBERS
-from rockbench.studies.recording import finish_run
 from rockbench.studies.tolerances import Tolerances
 from rockbench.trajectory import Status, Trajectory
 
@@ -39,6 +50,15 @@ def fault() -> object:
         fault_engine.reference(sc)
     yield
     unregister("fault")
+
+
+INLINE = ExecutionOptions(isolate=False)
+
+
+def _identity(scenario: Scenario, method: Method) -> RunIdentity:
+    """The identity of running ``method`` on ``scenario`` with this code."""
+    resolved = fault_engine.FaultEngine.resolve_settings(method.settings).to_dict()
+    return RunIdentity.of(scenario, method, engine_version="0.0-test", resolved=resolved)
 
 
 def _traj(status: Status = Status.OK) -> Trajectory:
@@ -65,38 +85,85 @@ def test_record_find_and_runs(tmp_path: Path) -> None:
     db = tmp_path / "sub" / "r.db"
     fine, coarse = Method.of("fault", {"timestep": 0.001}), Method.of("fault", {"timestep": 0.002})
     ok = evaluate_run(TINY[0], _traj(), None)
+    ident = _identity(TINY[0], fine)
     with Store(db, session="s1") as store:
-        rid = store.record(TINY[0], fine, _traj(), ok, kind="matrix", suite="smoke")
+        rid = store.record(TINY[0], fine, _traj(), ok, ident, kind="matrix", suite="smoke")
         crashed = _traj(Status.CRASHED)
         store.record(TINY[0], coarse, crashed, evaluate_run(TINY[0], crashed, None),
-                     kind="sweep")
+                     _identity(TINY[0], coarse), kind="sweep")
         assert rid == 1 and len(store) == 2
     with Store(db) as store:  # reopened: everything is there
-        rec = store.find(TINY[0], fine)
+        rec = store.find(ident)
         assert rec is not None
         assert rec.metrics == ok  # the typed metrics come back as they went in
-        assert rec.metrics.peaks == pytest.approx((np.sin(0.4) / TINY[0].critical_angle,))
+        assert rec.metrics.peaks == pytest.approx(
+            (np.sin(0.4) / critical_angle(TINY[0].geometry),))
         assert rec.status is Status.OK and rec.suite == "smoke" and rec.session == "s1"
         assert rec.engine_version == "0.0-test"
         assert rec.rockbench_version == rockbench.__version__
+        assert rec.code_version == provenance.code_version("run") == rec.made_by
         assert rec.effective_settings == {"timestep": 0.001}
         assert rec.machine and rec.timestamp.endswith("+00:00")
-        assert store.find(TINY[0], fine, engine_version="other") is None
-        assert store.find(TINY[1], fine) is None
+        # every part of the identity must match
+        for other in (dataclasses.replace(ident, engine_version="other"),
+                      dataclasses.replace(ident, code_version="0.0.0+other"),
+                      dataclasses.replace(ident, variation="halved"),
+                      _identity(TINY[1], fine)):
+            assert store.find(other) is None, other
         assert [r.kind for r in store.runs(scenario="tiny-0")] == ["matrix", "sweep"]
         assert [r.status for r in store.runs(kind="sweep")] == [Status.CRASHED]
 
 
-def test_finish_run_records_the_identity_of_the_run(tmp_path: Path) -> None:
-    ref = fault_engine.reference(TINY[0])
+def test_a_reader_does_not_hold_up_a_study_writing_to_the_store(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """WAL: ``rockbench history`` reads a store while a study appends runs to it."""
+    db = tmp_path / "r.db"
+    fine, coarse = Method.of("fault", {"timestep": 0.001}), Method.of("fault", {"timestep": 0.002})
+    ok = evaluate_run(TINY[0], _traj(), None)
+    with Store(db) as writer:
+        assert writer.db.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+        writer.record(TINY[0], fine, _traj(), ok, _identity(TINY[0], fine), kind="matrix")
+        with Store(db, create=False) as reader:
+            reader.db.execute("BEGIN")  # a read in progress
+            assert reader.db.execute("SELECT COUNT(*) FROM runs").fetchone()[0] == 1
+            start = time.perf_counter()
+            writer.record(TINY[0], coarse, _traj(), ok, _identity(TINY[0], coarse),
+                          kind="matrix")
+            assert time.perf_counter() - start < 5.0  # not blocked by the reader
+            # the read sees the store as it began; the next one sees the new run
+            assert reader.db.execute("SELECT COUNT(*) FROM runs").fetchone()[0] == 1
+            reader.db.commit()
+            assert len(reader) == 2
+        assert main(["history", "--db", str(db)]) == 0  # the writer still holds it open
+        assert "tiny-0" in capsys.readouterr().out
+
+
+def _untimed(m: RunMetrics) -> RunMetrics:
+    """``m`` without what the clock measures (it differs from one run to the next)."""
+    return dataclasses.replace(m, wall_time=0.0, cpu_time=None, realtime_factor=None)
+
+
+def test_a_campaign_records_the_identity_of_each_run(tmp_path: Path) -> None:
     method = Method.of("fault", {"follow": True})
+    plan = [PlannedRun(TINY[0], method)]
+    campaign = run_campaign(plan, CampaignOptions(kind="compare", db=tmp_path / "r.db",
+                                                  execution=INLINE))
+    (res,) = campaign.results
+    m = res.metrics
     with Store(tmp_path / "r.db") as store:
-        m = finish_run(store, TINY[0], method, ref, ref, kind="compare")
         (rec,) = store.runs()
-    assert m.max_error == 0.0 and m.reference_status is Status.OK  # a run equal to its ref
+        assert store.find(_identity(TINY[0], method)) == rec
+    # measured against the analytic reference it follows with a relative error of
+    # 10 · timestep / iterations = 1e-3: from the release at 0.2 λ, 2e-4 λ
+    assert m.max_error == pytest.approx(0.2 * 1e-3, rel=1e-9)
+    assert m.reference_status is Status.OK
     assert rec.kind == "compare" and rec.metrics == m and rec.method == "fault"
-    assert m.scenario_hash == scenario_hash(TINY[0]) and m.settings_hash
-    assert finish_run(None, TINY[0], method, ref, ref, kind="compare") == m  # no store
+    assert m.scenario_hash == scenario_hash(TINY[0])
+    assert m.settings_hash == _identity(TINY[0], method).resolved_key  # the resolved knobs
+    assert not res.reused
+    no_store = run_campaign(plan, CampaignOptions(kind="compare", execution=INLINE))
+    assert _untimed(no_store.results[0].metrics) == _untimed(m)  # measured alike, no store
+
 
 def test_reference_cache_round_trip(tmp_path: Path) -> None:
     with Store(tmp_path / "r.db") as store:
@@ -152,11 +219,14 @@ def test_a_schema_1_store_is_upgraded_in_place(tmp_path: Path) -> None:
         (old,) = store.runs()
         assert old.status is Status.OK and old.metrics is None  # schema-1 metrics: a dict
         assert old.method == "fault" and old.cpu_time is None
+        assert old.code_version == ""  # made by older code: never reused
+        ident = _identity(TINY[0], Method("fault"))
+        assert store.find(ident) is None
         m = evaluate_run(TINY[0], _traj(), None)
-        store.record(TINY[0], Method("fault"), _traj(), m, kind="matrix")
-        assert store.find(TINY[0], Method("fault")).metrics == m
+        store.record(TINY[0], Method("fault"), _traj(), m, ident, kind="matrix")
+        assert store.find(ident).metrics == m
     with sqlite3.connect(db) as con:
-        assert con.execute("SELECT value FROM meta WHERE key='schema'").fetchone()[0] == "2"
+        assert con.execute("SELECT value FROM meta WHERE key='schema'").fetchone()[0] == "3"
         assert con.execute("PRAGMA application_id").fetchone()[0] != 0
     con.close()
 
@@ -202,25 +272,28 @@ def test_resume_after_an_interrupted_matrix(tmp_path: Path) -> None:
         if len(done) == 2:
             raise KeyboardInterrupt
 
-    with Store(db) as store, pytest.raises(KeyboardInterrupt):
-        run_matrix(TINY, ["fault"], tol, settings={"fault": {"follow": True}}, store=store,
+    def stored() -> int:
+        with Store(db) as store:
+            return len(store)
+
+    with pytest.raises(KeyboardInterrupt):
+        run_matrix(TINY, ["fault"], tol, settings={"fault": {"follow": True}}, db=db,
                    execution=ExecutionOptions(jobs=1, timeout=30), on_cell=interrupt)
     with Store(db) as store:
         assert len(store) == 2  # nothing finished was lost
         assert len(store.runs(kind="matrix")) == 2
-        reused: list[bool] = []
-        result = run_matrix(TINY, ["fault"], tol, settings={"fault": {"follow": True}},
-                            store=store, resume=True,
-                            execution=ExecutionOptions(jobs=2, timeout=30),
-                            on_cell=lambda c: reused.append(c.reused))
-        assert sorted(reused) == [False, True, True]
-        assert result.exit_code == 0 and len(result.cells) == 3
-        assert len(store) == 3
-        # other settings are another cell: not reused
-        run_matrix(TINY[:1], ["fault"], tol, settings={"fault": {"follow": True,
-                                                                 "iterations": 20}},
-                   store=store, resume=True, execution=ExecutionOptions(jobs=1, timeout=30))
-        assert len(store) == 4
+    reused: list[bool] = []
+    result = run_matrix(TINY, ["fault"], tol, settings={"fault": {"follow": True}},
+                        db=db, resume=True, execution=ExecutionOptions(jobs=2, timeout=30),
+                        on_cell=lambda c: reused.append(c.reused))
+    assert sorted(reused) == [False, True, True]
+    assert result.exit_code == 0 and len(result.cells) == 3
+    assert stored() == 3
+    # other settings are another cell: not reused
+    run_matrix(TINY[:1], ["fault"], tol, settings={"fault": {"follow": True,
+                                                             "iterations": 20}},
+               db=db, resume=True, execution=ExecutionOptions(jobs=1, timeout=30))
+    assert stored() == 4
 
 
 def test_resume_and_history_through_the_cli(tmp_path: Path,
@@ -246,10 +319,8 @@ def test_resume_and_history_through_the_cli(tmp_path: Path,
     assert "tiny-1 on fault" in out and "max_error" in out
     assert main(["history", "--db", str(tmp_path / "missing.db")]) == 2
     # runs of any study show, compare included
-    with Store(db) as store:
-        sc = TINY[0]
-        ref = fault_engine.reference(sc)
-        finish_run(store, sc, Method.of("fault", {"follow": True}), ref, ref, kind="compare")
+    run_campaign([PlannedRun(TINY[0], Method.of("fault", {"follow": True}))],
+                 CampaignOptions(kind="compare", db=Path(db), execution=INLINE))
     capsys.readouterr()
     assert main(["history", "tiny-0", "--db", db, "--kind", "compare"]) == 0
     out = capsys.readouterr().out
