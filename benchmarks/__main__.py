@@ -26,7 +26,7 @@ from benchmarks import load, machine_info
 MODULES = {"overhead": "overhead", "analytic": "analytic_speed", "scaling": "scaling",
            "paper": "paper_times", "study": "study_overhead", "rollout": "mujoco_rollout",
            "pareto": "preset_pareto", "stack": "stack_convergence",
-           "fragility": "fragility_cost"}
+           "fragility": "fragility_cost", "verdict": "verdict_cost"}
 SECTIONS = tuple(MODULES)
 HERE = Path(__file__).resolve().parent
 

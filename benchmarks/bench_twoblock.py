@@ -15,8 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
+from rockbench.analytic import critical_angle
 from rockbench.analytic.twoblock import two_block_reference
-from rockbench.scenarios import Block, Scenario, SinePulse, Sinusoid, Stack
+from rockbench.geometry import Geometry
+from rockbench.scenarios import Block, Scenario, SinePulse, Sinusoid, stack
 
 CASES = [(3.3, 4), (4.0, 3), (4.0, 4), (4.0, 5), (5.0, 2), (5.0, 3), (5.0, 4), (6.5, 2)]
 #: Published analytical max |θ|/λ (Table 9 top block, Table 10 bottom block); None = not given.
@@ -26,11 +28,11 @@ PAPER_BOTTOM = {(4.0, 3): 0.022, (4.0, 4): 0.114, (4.0, 5): 0.125, (5.0, 2): 0.0
                 (5.0, 3): 0.055, (5.0, 4): 0.061, (6.5, 2): 0.026}
 
 
-def paper_stack() -> Stack:
+def paper_stack() -> Geometry:
     """Peña et al. (2008) two-block specimen as modelled in the paper."""
     bottom = Block(width=0.20, depth=0.40, height=0.60, density=2670, chamfer=0.005)
     top = Block(width=0.15, depth=0.55, height=0.60, density=2670, chamfer=0.005)
-    return Stack((bottom, top))
+    return stack((bottom, top))
 
 
 def scenarios() -> list[tuple[str, tuple[float, int], Scenario]]:
@@ -68,7 +70,7 @@ def main(argv: list[str] | None = None) -> str:
             t0 = time.perf_counter()
             tr = two_block_reference(sc)
             best = min(best, time.perf_counter() - t0)
-        lam = sc.critical_angle
+        lam = critical_angle(sc.geometry)
         mx = np.nanmax(np.abs(tr.theta), axis=0) / lam
         t_over = tr.extra.get("overturn_time")
         pb = PAPER_BOTTOM.get(key) if kind == "pulse" else None
@@ -79,8 +81,8 @@ def main(argv: list[str] | None = None) -> str:
             f"| {len(tr.impacts)} | {best:.3f} | {mx[0]:.3f} | {_fmt(pb)} | {mx[1]:.3f} "
             f"| {_fmt(pt)} |"
         )
-    lam = scenarios()[0][2].critical_angle
-    text = "\n".join(lines) + f"\n\nλ = scenario.critical_angle = {lam:.6f} rad " \
+    lam = critical_angle(scenarios()[0][2].geometry)
+    text = "\n".join(lines) + f"\n\nλ = critical_angle(geometry) = {lam:.6f} rad " \
         f"({np.degrees(lam):.3f}°)\n"
     print(text)
     if args.out:

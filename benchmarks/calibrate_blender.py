@@ -77,7 +77,7 @@ def raw_loop(engine: BlenderEngine, scenario: Scenario, settings: Any, dt: float
     reset and a few operators, a large part of a short run) to its teardown.
     """
     t0 = time.perf_counter()
-    engine._build(scenario, settings)
+    cal.build(engine, scenario, settings)
     scene, ob = engine._scene, engine._blocks[0]
     n_out = scenario.output_times().size
     out = np.empty((n_out, 7))

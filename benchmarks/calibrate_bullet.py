@@ -49,7 +49,7 @@ def overhead(settings: object, sc: Scenario, repeat: int = 3) -> tuple[float, fl
     for _ in range(repeat):
         for raw in (False, True):
             eng = BulletEngine()
-            dt = eng._build(sc, eng.resolve_settings(settings))
+            dt = cal.build(eng, sc, eng.resolve_settings(settings))
             k = max(1, round(1.0 / (sc.output_rate * dt)))
             poses = np.full((n_out, sc.n_blocks, 7), np.nan)
             t0 = time.perf_counter()

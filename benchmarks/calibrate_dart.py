@@ -56,7 +56,7 @@ def raw_loop(eng: DartEngine, sc, s, dt: float, k: int) -> float:
     """A bare dartpy step loop sampling the block's coordinates on the adapter's scene
     (built outside the timing); returns its wall time."""
     raw = DartEngine()
-    raw._build(sc, s)
+    cal.build(raw, sc, s)
     skel, step = raw._skels[0], raw._world.step
     n_out = sc.output_times().size
     out = np.empty((n_out, 6))

@@ -74,7 +74,7 @@ PULSE_COLS = [cal.col("pulse", "case"), cal.col("status", "status"),
 def run_stacks(cfg: dict) -> None:
     """The paper's eight two-block pulses: peaks of both blocks (normalised by the
     scenario's λ) against the project's two-block analytic model and the paper."""
-    from rockbench.analytic import reference
+    from rockbench.analytic import critical_angle, reference
     from rockbench.scenarios.catalog import get_scenario
 
     print("| stack pulse | status | top dem2d | top analytic | top error | top paper an./3DEC "
@@ -83,7 +83,7 @@ def run_stacks(cfg: dict) -> None:
     worst = 0.0
     for (f, a), (tan_, tdem, ban, bdem) in STACK_PULSES.items():
         sc = get_scenario(f"stack-pulse-{f:.1f}hz-{a}mm")
-        lam = sc.critical_angle
+        lam = critical_angle(sc.geometry)
         tr = Dem2dEngine().simulate(sc, cfg)
         pk = np.max(np.abs(tr.theta), axis=0) / lam
         ref = reference(sc)

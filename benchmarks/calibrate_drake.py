@@ -54,7 +54,7 @@ def raw_loop(eng: DrakeEngine, sc, s, dt: float, k: int) -> float:
     ``GetPositions``); returns its wall time."""
     n_out = sc.output_times().size
     t0 = time.perf_counter()
-    eng._build(sc, s)
+    cal.build(eng, sc, s)
     sim, plant, pc = eng._sim, eng._plant, eng._pc
     raw = np.empty((n_out, 7))
     raw[0] = plant.GetPositions(pc)

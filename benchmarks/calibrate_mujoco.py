@@ -42,7 +42,7 @@ class _Probe(MujocoEngine):
 
     def _teardown(self) -> None:
         d = self._data
-        if d is not None and not self._exc.is_free:
+        if d is not None and self.drive.moving:
             self.base_end = float(d.qpos[self._jq])
         super()._teardown()
 

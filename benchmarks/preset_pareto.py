@@ -309,8 +309,8 @@ def candidates(engine: str) -> dict[str, dict[str, Any]]:
 def _result(sc: Any, traj: Any, ref: Any) -> CaseResult:
     m = evaluate_run(sc, traj, ref)
     inf = math.inf
-    peak = 0.0 if sc.excitation.is_free else (abs(m.peak_error) if m.peak_error is not None
-                                              else inf)
+    peak = 0.0 if sc.motion.is_free else (abs(m.peak_error) if m.peak_error is not None
+                                          else inf)
     return CaseResult(traj.status, m.max_error if m.max_error is not None else inf, peak,
                       float(traj.cpu_time), float(traj.wall_time))
 

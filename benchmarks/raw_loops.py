@@ -5,9 +5,12 @@ the time step and the precomputed base kinematics are identical to
 :meth:`Engine.simulate`), then steps it with plain library calls bound to local
 names, writes the block poses into one preallocated array at the output rate
 only, and converts them to θ once at the end. The base is driven with the same
-values as the adapter (bit-identical trajectories are expected; the benchmark
-checks it), and held still with the plugin's own ``_fix_base`` once the
-excitation has ended (at the same sample as the adapter does).
+values as the adapter: the plugin's own precomputed base kinematics, or, where
+the plugin samples them lazily, the same :class:`~rockbench.engines.drive.BaseDrive`
+(set on the engine before ``_build``, as ``simulate()`` does) sampled on the same
+step grid as the engine module (bit-identical trajectories are expected; the
+benchmark checks it); and held still with the plugin's own ``_fix_base`` once the
+base motion has ended (at the same sample as the adapter does).
 
 The ratio ``simulate() wall / raw wall`` is the adapter's overhead: the
 template loop, hook dispatch, per-step ``_drive_base`` bookkeeping and the
@@ -24,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from rockbench.engines import angles_from_quaternions, get_engine
+from rockbench.engines.drive import BaseDrive
 from rockbench.scenarios import Scenario
 
 __all__ = ["RAW_LOOPS", "run_raw", "driven_samples"]
@@ -33,13 +37,13 @@ def driven_samples(scenario: Scenario, dt: float, k: int) -> int:
     """Number of output samples during which the base is driven (as the base loop does).
 
     ``Engine._sample_aligned`` drives sample after sample and fixes the base after
-    the first sample whose end ``i·k·dt`` is past ``excitation.end_time``.
+    the first sample whose end ``i·k·dt`` is past the base drive's ``end_time``.
     """
-    exc = scenario.excitation
+    drive = BaseDrive(scenario.motion, scenario.duration)
     n_out = scenario.output_times().size
-    if exc.is_free:
+    if not drive.moving:
         return 0
-    end = exc.end_time
+    end = drive.end_time
     if not math.isfinite(end):
         return n_out - 1
     for i in range(1, n_out):
@@ -58,10 +62,11 @@ def _mujoco(eng: Any, sc: Scenario, dt: float, k: int, poses: np.ndarray) -> Non
     n_out = poses.shape[0]
     ns = driven_samples(sc, dt, k)
     if ns:
-        exc = sc.excitation
-        t = np.arange(ns * k + 1) * dt
-        v = np.asarray(exc.velocity(t), float)
-        u = np.asarray(exc.displacement(t), float).tolist()
+        # the plugin's chunks (``_load_chunk``): u, v at (start + i)·dt, force from diff(v)
+        drive = eng.drive
+        t = drive.grid(dt, ns * k + 1)
+        v = drive.velocity(t)[:, 0]
+        u = drive.displacement(t)[:, 0].tolist()
         f = (eng._mbase * np.diff(v) / dt).tolist()
         v = v.tolist()
         qpos, qvel, qfrc, jq, jv = d.qpos, d.qvel, d.qfrc_applied, eng._jq, eng._jv
@@ -186,10 +191,13 @@ def _pymunk(eng: Any, sc: Scenario, dt: float, k: int, poses: np.ndarray) -> Non
 
     read()
     if ns:
+        if eng._uz_list is not None:
+            raise ValueError("the raw pymunk loop drives the base along x only")
         set_pos, set_vel, bptr = lib.cpBodySetPosition, lib.cpBodySetVelocity, eng._base._body
-        last = eng._v_mid.size - 1
+        last = len(eng._v_mid) - 1
         idx = np.minimum(np.arange(ns * k), last)
-        u, v = eng._u_start[idx].tolist(), eng._v_mid[idx].tolist()
+        # the plugin's precomputed base x: u at the step start, v at mid-step
+        u, v = eng._u_start[idx, 0].tolist(), eng._v_mid[idx, 0].tolist()
         j = 0
         for _ in range(ns):
             for uu, vv in zip(u[j:j + k], v[j:j + k], strict=True):
@@ -222,10 +230,10 @@ def _drake(eng: Any, sc: Scenario, dt: float, k: int, poses: np.ndarray) -> None
     n_out = poses.shape[0]
     ns = driven_samples(sc, dt, k)
     if ns:
-        exc, joint, pc = sc.excitation, eng._joint, eng._pc
-        t = np.arange(ns * k) * dt
-        u = np.asarray(exc.displacement(t), float).tolist()
-        v = np.asarray(exc.velocity(t + eng._phase * dt), float).tolist()
+        # the plugin's chunks: u at i·dt, v at (i + φ)·dt (φ = base_velocity_phase)
+        drive, joint, pc = eng.drive, eng._joint, eng._pc
+        u = drive.displacement(drive.grid(dt, ns * k))[:, 0].tolist()
+        v = drive.velocity(drive.grid(dt, ns * k, phase=eng._phase))[:, 0].tolist()
         set_x, set_v = joint.set_translation, joint.set_translation_rate
         j = 0
         for i in range(1, ns + 1):
@@ -251,7 +259,9 @@ def _dem2d(eng: Any, sc: Scenario, dt: float, k: int, poses: np.ndarray) -> None
     n_out = poses.shape[0]
     ns = driven_samples(sc, dt, k)
     if ns:
-        u = np.asarray(sc.excitation.displacement(np.arange(ns * k) * dt), float)
+        # the plugin's base positions (``_base_positions``): u_x at i·dt
+        drive = eng.drive
+        u = np.ascontiguousarray(drive.displacement(drive.grid(dt, ns * k))[:, 0], float)
         sample(ns, k, dt, *args, u, poses[1:ns + 1])
         eng._fix_base()
     if ns + 1 < n_out:
@@ -308,7 +318,7 @@ def _blender(eng: Any, sc: Scenario, dt: float, k: int, poses: np.ndarray) -> No
             q, p = m.to_quaternion(), m.translation
             poses[i, b] = (p.x, p.y, p.z, q.w, q.x, q.y, q.z)
 
-    if ns and eng._motor is not None:
+    if ns and (eng._motor is not None or eng._tilt):
         raise ValueError("the raw blender loop drives a kinematic base only")
     frame = 1
     if ns:
@@ -363,6 +373,8 @@ def run_raw(name: str, scenario: Scenario, settings: Any = None,
     eng = get_engine(name)
     s = eng.resolve_settings(settings)
     n_out = scenario.output_times().size
+    # what ``simulate()`` sets before ``_build``
+    eng.drive = BaseDrive(scenario.motion, scenario.duration)
     try:
         dt = float(eng._build(scenario, s))
         ratio = 1.0 / (scenario.output_rate * dt)

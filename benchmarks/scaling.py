@@ -21,7 +21,7 @@ import numpy as np
 from benchmarks import ENGINES, best_of, engine_status, interleaved, load, warm
 from rockbench.engines import engine_class, get_engine
 from rockbench.runner import ExecutionOptions, Job, run_jobs
-from rockbench.scenarios import Block, Scenario, SinePulse, Stack, get_scenario
+from rockbench.scenarios import Block, Scenario, SinePulse, get_scenario, stack
 
 __all__ = ["run", "stack_scenario"]
 
@@ -32,7 +32,7 @@ STACK_BUDGET = 30.0
 def stack_scenario(n: int, duration: float = 1.0) -> Scenario:
     """N equal blocks 0.5 × 0.3 × 0.25 m under a small (non-rocking) pulse."""
     blk = Block(width=0.5, depth=0.3, height=0.25, density=2670.0)
-    return Scenario(name=f"stack-{n}", stack=Stack((blk,) * n),
+    return Scenario(name=f"stack-{n}", geometry=stack((blk,) * n),
                     excitation=SinePulse(frequency=5.0, amplitude=0.001),
                     duration=duration, output_rate=1000.0)
 

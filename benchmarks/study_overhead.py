@@ -16,7 +16,9 @@ interleaved (fresh, warm, fresh, warm, ...), ``--jobs 2``:
   --presets accurate,fast``, as :func:`rockbench.studies.compare.run_comparison`
   (the engine runs, the analytic references and the predictability ensembles
   of 8 perturbed analytic runs per scenario that a comparison also runs, their
-  metrics and trajectory files; not the report rendering), on every second
+  metrics), and the trajectory files the report writes
+  (:func:`rockbench.report.compare_report.write_trajectories`; not the rest of
+  the report rendering), on every second
   scenario of each paper group (the whole suite takes five minutes per
   variant on an idle machine); the runs' CPU time is summed over every run the
   study dispatches;
@@ -27,6 +29,7 @@ interleaved (fresh, warm, fresh, warm, ...), ``--jobs 2``:
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import resource
 import sys
 import tempfile
@@ -40,6 +43,7 @@ import numpy as np
 
 import rockbench.runner as runner
 from benchmarks import engine_status, load
+from rockbench.report.compare_report import write_trajectories
 from rockbench.runner import ExecutionOptions, Job, run_jobs
 from rockbench.scenarios import Scenario, get_scenario, get_suite
 from rockbench.studies.compare import CompareOptions, run_comparison
@@ -119,10 +123,14 @@ def _every_run() -> Iterator[list[float]]:
 def _paper_study(scenarios: list[Scenario], engines: list[str]) -> Callable[
         [ExecutionOptions], list[float]]:
     def study(ex: ExecutionOptions) -> list[float]:
+        # every variant computes its references and predictability ensembles itself, as
+        # the first one did: forget the ones this process keeps from the previous study
+        importlib.import_module("rockbench.campaign.references")._MEMO.clear()
         with tempfile.TemporaryDirectory(prefix="rockbench-bench-") as tmp, \
                 _every_run() as cpus:
-            run_comparison(CompareOptions(scenarios=scenarios, engines=engines,
-                                          out=Path(tmp), presets=PRESETS, execution=ex))
+            result = run_comparison(CompareOptions(scenarios=scenarios, engines=engines,
+                                                   presets=PRESETS, execution=ex))
+            write_trajectories(result, Path(tmp))
         return cpus
     return study
 

@@ -31,7 +31,7 @@ computed anywhere else. Definitions (angles normalised by the scenario's λ):
   m; None for a single block): tangential (slip along the lower block's top
   face) and normal (gap, or penetration, at the active interface pivot).
 * ``horizon``: the predictability horizon t* the comparison stopped at
-  (:mod:`rockbench.studies.predictability`; None: not measured, the whole run
+  (:mod:`rockbench.campaign.predictability`; None: not measured, the whole run
   is compared). With a horizon shorter than the run, ``max_error``,
   ``max_error_early``, the impact errors and the peak errors (peaks of θ up to
   t*) stop at t*: beyond it the reference itself is not predictable, so peaks
@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 
 from rockbench import metrics
+from rockbench.analytic import critical_angle
 from rockbench.method import Method
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
@@ -92,13 +93,14 @@ def sliding(traj: Trajectory, scenario: Scenario) -> float | None:
     sliding or drift of the contact. Only samples where the block is within its
     critical angle count (an overturning block slides when it lands).
     """
-    if scenario.is_assembly or traj.t.size == 0 or not np.all(np.isfinite(traj.x[:, 0])):
-        return None  # (an assembly's blocks have no single base pivot to slide on)
-    b = scenario.blocks[0]
+    col = scenario.geometry.column
+    if col is None or traj.t.size == 0 or not np.all(np.isfinite(traj.x[:, 0])):
+        return None  # (other geometries' blocks have no single base pivot to slide on)
+    b = col.blocks[0]
     th = traj.theta[:, 0]
     sgn = np.sign(th)
-    u = np.asarray(scenario.excitation.displacement(traj.t), float)
-    x_kin = (u + scenario.stack.offsets[0] + sgn * b.pivot_half_width
+    u = np.asarray(scenario.motion.x.displacement(traj.t), float)
+    x_kin = (u + col.offsets[0] + sgn * b.pivot_half_width
              - sgn * b.pivot_half_width * np.cos(th) + b.h * np.sin(th))
     keep = np.abs(th) <= b.rocking(scenario.g).lam  # not falling over
     return float(np.max(np.abs(traj.x[keep, 0] - x_kin[keep]))) if keep.any() else None
@@ -124,25 +126,25 @@ def interface_motion(traj: Trajectory,
         None for a single block or a trajectory without finite positions.
     """
     nb = scenario.n_blocks
-    if nb < 2 or traj.t.size == 0 or scenario.is_assembly:
+    col = scenario.geometry.column
+    if nb < 2 or traj.t.size == 0 or col is None:
         return None, None
     if not (np.all(np.isfinite(traj.x)) and np.all(np.isfinite(traj.z))):
         return None, None
     # not falling: the bottom block within its λ, each upper one within its interface's
-    keep = np.abs(traj.theta[:, 0]) <= scenario.blocks[0].rocking(scenario.g).lam
+    keep = np.abs(traj.theta[:, 0]) <= col.blocks[0].rocking(scenario.g).lam
     for i in range(1, nb):
         keep &= (np.abs(traj.theta[:, i] - traj.theta[:, i - 1])
-                 <= scenario.stack.interface(i, scenario.g).lam)
+                 <= col.interface(i, scenario.g).lam)
     if not keep.any():
         return None, None
     th, x, z = traj.theta[keep], traj.x[keep], traj.z[keep]
-    offs = scenario.stack.offsets
+    offs = col.offsets
     slip = gap = 0.0
     for i in range(1, nb):
-        lo, up = scenario.blocks[i - 1], scenario.blocks[i]
+        lo, up = col.blocks[i - 1], col.blocks[i]
         o_lo, o_up = offs[i - 1], offs[i]
-        right = min(o_lo + lo.pivot_half_width, o_up + up.pivot_half_width)
-        left = max(o_lo - lo.pivot_half_width, o_up - up.pivot_half_width)
+        left, right = col.overlap(i)
         phi = th[:, i] - th[:, i - 1]
         # at φ = 0 (face contact) every point of the face is shared: take its middle
         xp = np.where(phi > 0, right, np.where(phi < 0, left, 0.5 * (left + right)))
@@ -344,7 +346,7 @@ def evaluate_run(scenario: Scenario, traj: Trajectory, reference: Trajectory | N
         Predictability horizon t* (s) of the scenario: errors are measured up
         to it (see the module docstring); recorded as ``horizon``.
     """
-    lam = scenario.critical_angle
+    lam = critical_angle(scenario.geometry)
     n = traj.t.size
     simulated = float(traj.t[-1]) if n else 0.0
     wall = float(traj.wall_time)
@@ -451,12 +453,15 @@ class RunResult:
         From :func:`evaluate_run`.
     trajectory : str
         The file holding its time history, if the study keeps one.
+    reused : bool
+        Taken from the results store rather than run now.
     """
 
     scenario: Scenario
     method: Method
     metrics: RunMetrics
     trajectory: str = ""
+    reused: bool = False
 
     @property
     def status(self) -> Status:

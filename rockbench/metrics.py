@@ -2,7 +2,7 @@
 and the report both use it, so it sits beside :mod:`rockbench.trajectory`).
 
 All angles are normalised by a critical angle λ given by the caller
-(``Scenario.critical_angle``).
+(:func:`rockbench.analytic.critical_angle`).
 """
 
 from __future__ import annotations

@@ -1,13 +1,19 @@
 """The command line: listing, running, writing trajectories, one-line errors with status 2."""
 
+import argparse
 import json
+import re
+import shlex
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
-from rockbench.cli import main
+from rockbench.cli import build_parser, main
+from rockbench.cli.common import execution_options
+from rockbench.runner import default_jobs
+from rockbench.scenarios import catalog
 from rockbench.trajectory import Trajectory
 
 
@@ -36,6 +42,8 @@ def test_help_and_listing(capsys):
     (["scenarios", "--suite", "nope"], "unknown suite 'nope'"),
     (["run"], "required"),
     (["run", "free-b0", "--settings", "missing.toml"], "missing.toml"),
+    (["run", "free-b0", "--engine", "analytic", "--set", "analytic.foo=1"],
+     "error: engine 'analytic' has no knob 'foo'; knobs: linear"),
 ])
 def test_bad_input_is_one_line_and_status_2(args, needle):
     r = _cli(*args)
@@ -82,3 +90,44 @@ def test_run_engine_against_reference_npz(tmp_path, capsys):
     ref = Trajectory.load(tmp_path / "run-analytic.npz")
     assert mj.engine == "mujoco" and ref.engine == "analytic"
     assert np.max(np.abs(mj.theta - ref.theta)) / 0.4636 < 0.02
+
+
+def test_a_closed_pipe_ends_the_output_quietly():
+    """``rockbench records --json | head -1``: the reader goes away, no traceback."""
+    cmd = f"{shlex.quote(sys.executable)} -m rockbench.cli records --json | head -1"
+    r = subprocess.run(cmd, shell=True, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0 and r.stdout == "[\n"
+    assert "Traceback" not in r.stderr and "BrokenPipe" not in r.stderr
+    assert r.stderr == "", r.stderr
+
+
+def test_catalog_descriptions_read_as_text(capsys):
+    """Descriptions say what the scene is, not fragments of its name (``5drums drums``)."""
+    texts = {}
+    for name in catalog():
+        assert main(["scenarios", "--show", name]) == 0
+        (line,) = [ln for ln in capsys.readouterr().out.splitlines()
+                   if ln.startswith("description = ")]
+        texts[name] = line
+    for name, text in texts.items():
+        assert "drums drums" not in text and not re.search(r"\d(drums|offset)|offset\d", text), \
+            (name, text)
+    assert "multi-drum column of 5 drums 0.6 × 0.5 m" in texts["column-5drums"]
+    assert "multi-drum column of 3 drums" in texts["column-3drums"]
+    assert "its centre 0.25 m from the wall's" in texts["parapet-offset0.25"]
+    assert "its centre 0.00 m from the wall's" in texts["parapet-offset0.00"]
+
+
+#: The commands that run studies (each runs many simulations in parallel).
+STUDIES = ("compare", "matrix", "sweep", "tune", "fragility", "collapse", "assemblies",
+           "spectrum")
+
+
+def test_every_study_runs_on_the_usable_cores_by_default():
+    parser = build_parser()
+    (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    for name in STUDIES:
+        (jobs,) = [a for a in sub.choices[name]._actions if "--jobs" in a.option_strings]
+        args = argparse.Namespace(jobs=jobs.default)
+        assert execution_options(args).jobs == default_jobs(), name
+        assert "cores" in jobs.help, (name, jobs.help)

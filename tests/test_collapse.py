@@ -11,6 +11,7 @@ import pytest
 from matplotlib.figure import Figure
 from matplotlib.patches import FancyArrow
 
+from rockbench.analytic import critical_angle
 from rockbench.cli import main
 from rockbench.engines import get_engine
 from rockbench.report.assembly_report import _MOVING, draw_assembly, write_assembly_report
@@ -30,7 +31,7 @@ from rockbench.trajectory import Status, Trajectory
 
 HERE = ExecutionOptions(isolate=False)
 #: A slender block: b/h = 0.2, the static factor tan λ = 0.2.
-SLENDER = Scenario(name="slender", stack=Block(0.2, 0.2, 1.0, mass=1.0))
+SLENDER = Scenario(name="slender", geometry=Block(0.2, 0.2, 1.0, mass=1.0))
 PARAPET = get_scenario("parapet-offset0.25")
 PYMUNK = {"timestep": 1e-4}
 
@@ -50,20 +51,20 @@ def test_a_slow_pulse_collapses_a_block_just_above_g_tan_lambda(engine, settings
     above = pulse_scenario(SLENDER, 0.05, 1.02, 0.2)
     rest = eng.simulate(below, settings)
     assert collapsed(rest, below) is False
-    assert float(np.max(np.abs(rest.theta))) < 1e-3 * SLENDER.critical_angle
+    assert float(np.max(np.abs(rest.theta))) < 1e-3 * critical_angle(SLENDER.geometry)
     over = eng.simulate(above, settings)
     assert over.status is Status.OVERTURNED and collapsed(over, above) is True
 
 
 #: A squat block on a low-friction base: b/h = 2 > μ = 0.3, so it slides at α = μ.
-SQUAT = Scenario(name="squat", stack=Block(1.0, 0.2, 0.5, mass=1.0),
+SQUAT = Scenario(name="squat", geometry=Block(1.0, 0.2, 0.5, mass=1.0),
                  contact=Contact(friction=0.3))
 
 
 def _end_state(scenario: Scenario, dtheta, dx, dz) -> Trajectory:
     """Rest, then every block moved by (dθ, dx, dz) relative to the base at the end."""
     t = np.array([0.0, scenario.duration])
-    x0, z0 = (np.array([p[i] for p in scenario.stack.poses]) for i in (0, 1))
+    x0, z0 = (np.array([p[i] for p in scenario.geometry.poses]) for i in (0, 1))
     u = float(np.asarray(scenario.excitation.displacement(t[-1])))
     return Trajectory(t, np.vstack([np.zeros(2), dtheta]),
                       np.vstack([x0, x0 + u + np.asarray(dx)]),
@@ -72,7 +73,7 @@ def _end_state(scenario: Scenario, dtheta, dx, dz) -> Trajectory:
 
 def test_outcome_tells_sliding_from_collapse():
     sc = pulse_scenario(PARAPET, 1.0, 2.0, 0.125)
-    lam, (wall, top) = sc.critical_angle, sc.blocks
+    lam, (wall, top) = critical_angle(sc.geometry), sc.blocks
     far = 2 * RESIDUAL_DISPLACEMENT * wall.height
     cases = {
         "rest": ([0.0, 0.0], [0.0, 0.0], [0.0, 0.0]),
@@ -103,7 +104,7 @@ def test_a_squat_block_sliding_on_the_base_has_not_collapsed():
         (1.5, False, False), (3.0, True, False), (6.0, True, False)]
     sc = pulse_scenario(SQUAT, 0.5, 3.0, 0.3)
     run = get_engine("pymunk").simulate(sc, PYMUNK)
-    assert float(np.max(np.abs(run.theta))) < 0.01 * sc.critical_angle
+    assert float(np.max(np.abs(run.theta))) < 0.01 * critical_angle(sc.geometry)
     assert abs(run.x[-1, 0] - run.x[0, 0] - float(sc.excitation.displacement(run.t[-1]))) > 0.25
 
 

@@ -26,9 +26,9 @@ from rockbench.scenarios import (
     Record,
     Scenario,
     SinePulse,
-    Stack,
     scenario_from_dict,
     scenario_to_dict,
+    stack,
 )
 from rockbench.store import Store, scenario_hash
 from rockbench.studies.fragility import (
@@ -79,7 +79,7 @@ def pulse_record(ratio: float, block: Block) -> StudyRecord:
 
 
 def block_scenario(h: float, slenderness: float = 0.2) -> Scenario:
-    return Scenario(f"h{h:g}", Stack((Block(slenderness * h, slenderness * h, h,
+    return Scenario(f"h{h:g}", stack((Block(slenderness * h, slenderness * h, h,
                                             density=2000.0),)), Contact())
 
 
@@ -133,7 +133,7 @@ def test_below_the_uplift_threshold_nothing_rocks():
 def test_single_record_fragility_is_monotone_where_the_physics_is_and_islands_are_reported(
         tmp_path):
     blk = block_scenario(1.0)
-    block = blk.stack.blocks[0]
+    block = blk.blocks[0]
     long_pulse, short_pulse = pulse_record(2.0, block), pulse_record(6.0, block)
     levels = (1.0, 2.0, 3.0, 4.5, 6.0, 8.5, 9.25, 10.5, 12.0)
     res = study(blk, (long_pulse, short_pulse), levels, settle=3.0)
@@ -226,7 +226,7 @@ def test_toml_names_a_record_of_a_set_scaled_to_an_intensity():
                            "record": "RSN6_IMPVALL.I_I-ELC180", "measure": "pga-uplift",
                            "intensity": 1.5}}
     sc = scenario_from_dict(data)
-    rocking = sc.stack.blocks[0].rocking(sc.g)
+    rocking = sc.blocks[0].rocking(sc.g)
     assert intensity(sc.excitation, "pga-uplift", rocking, sc.g) == pytest.approx(1.5)
     back = scenario_from_dict(scenario_to_dict(sc))
     assert scenario_to_dict(back) == scenario_to_dict(sc)
@@ -270,10 +270,10 @@ def test_fragility_command_on_a_real_record(tmp_path, capsys):
 
 def test_a_stack_is_scaled_by_the_uplift_of_the_stack_as_one_body():
     lower, upper = Block(0.3, 0.3, 0.9, density=2000.0), Block(0.3, 0.3, 0.6, density=2000.0)
-    sc = Scenario("stack", Stack((lower, upper)), Contact())
+    sc = Scenario("stack", stack((lower, upper)), Contact())
     rec = noise_records(1)[0]
     res = study(sc, (rec,), (0.0, 0.8, 2.5), settle=1.0)
-    mono = sc.stack.monolithic(sc.g)
+    mono = sc.geometry.column.monolithic(sc.g)
     pga = float(np.max(np.abs(rec.record.acceleration(rec.record.times))))
     for r in res.runs:
         # the level is PGA/(g tan λ) of the whole stack rocking on the bottom corners

@@ -13,10 +13,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rockbench.analytic import critical_angle
+from rockbench.campaign.predictability import (
+    Perturbation,
+    Predictability,
+    ensemble_scenarios,
+    predictability,
+    spread_curve,
+)
 from rockbench.engines import register, unregister
 from rockbench.evaluation import evaluate_run
 from rockbench.method import REFERENCE, Method
 from rockbench.report.compare_report import write_report
+from rockbench.report.options import ReportOptions
 from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import get_scenario
 from rockbench.studies.compare import CompareOptions, run_comparison
@@ -26,13 +35,6 @@ from rockbench.studies.ensembles import (
     run_ensembles,
 )
 from rockbench.studies.matrix import Cell, evaluate, horizon_limits, run_matrix
-from rockbench.studies.predictability import (
-    Perturbation,
-    Predictability,
-    ensemble_scenarios,
-    predictability,
-    spread_curve,
-)
 from rockbench.studies.tolerances import Tolerances
 from rockbench.trajectory import Status, Trajectory
 
@@ -125,7 +127,7 @@ def test_bootstrap_interval_covers_the_true_distance(shift):
 def _synthetic():
     """A reference rocking at 1.5 Hz and a run equal to it up to 1.2 s, diverging after."""
     sc = _short("single-pulse-3.0hz-8mm", 2.0)
-    lam = sc.critical_angle
+    lam = critical_angle(sc.geometry)
     t = sc.output_times()
     ref_th = 0.2 * lam * np.sin(2 * np.pi * 1.5 * t)
     eng_th = ref_th + np.where(t > 1.2, 0.5 * lam * (t - 1.2), 0.0)
@@ -167,11 +169,11 @@ def test_compare_measures_errors_up_to_t_star_and_reports_distributions(tmp_path
     sc = _short(CHAOTIC, 3.0)
     register("fault", fault_engine.FaultEngine)  # follows the reference closely
     try:
-        opts = CompareOptions(scenarios=[sc], engines=["fault"], out=tmp_path,
+        opts = CompareOptions(scenarios=[sc], engines=["fault"],
                               overrides={"fault": {"follow": True}}, horizon_members=3,
                               ensemble=2, execution=HERE)
         result = run_comparison(opts)
-        files = write_report(result)
+        files = write_report(result, ReportOptions(tmp_path))
     finally:
         unregister("fault")
     p = result.predictability[sc.name]

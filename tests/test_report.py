@@ -19,6 +19,7 @@ import pytest
 from rockbench.cli import main
 from rockbench.engines import engine_info
 from rockbench.scenarios import load_scenario
+from rockbench.store import Store
 
 FREE = """
 name = "tiny-free"
@@ -112,6 +113,26 @@ def _theta(out: Path, scenario: str, method: str, block: int = 1) -> np.ndarray:
         return np.asarray(f[f"theta_{block}"])
 
 
+def _archive(report: dict) -> dict[Path, int]:
+    """Every trajectory the campaign archived beside the store (``runs.db`` → ``runs-runs/``),
+    with its modification time."""
+    with Store(report["tmp"] / "runs.db", create=False) as store:
+        folder = store.archive
+    assert folder is not None and folder.name == "runs-runs"
+    return {p: p.stat().st_mtime_ns for p in folder.glob("*/*.npz")}
+
+
+def _archived(report: dict, scenario: str, method: str) -> Path:
+    """The archived trajectory of the report's run (the store keeps where it lies)."""
+    key = _row(_csv(report["out"]), scenario, method)["settings_hash"]
+    with Store(report["tmp"] / "runs.db", create=False) as store:
+        paths = {r.trajectory for r in store.runs(scenario=scenario, kind="compare")
+                 if r.method == method and r.metrics is not None
+                 and r.metrics.settings_hash == key}
+    (path,) = paths
+    return Path(path)
+
+
 def _lam(report: dict, scenario: str) -> float:
     # λ from the geometry, by hand: atan(b/h) of a single rectangular block
     s = load_scenario(report["tmp"] / f"{scenario}.toml")
@@ -183,7 +204,7 @@ def test_failed_run_is_marked(report: dict) -> None:
     ref = _row(rows, "tiny-three", "analytic")
     assert ref["status"] == "unsupported" and ref["message"]
     eng = _row(rows, "tiny-three", report["engine"])
-    assert eng["max_error"] == "" and "no analytic reference" in eng["error_note"]
+    assert eng["max_error"] == "" and "no analytic model" in eng["error_note"]
     md = (out / "report.md").read_text()
     assert any("⊘ unsupported" in ln for ln in _table_lines(md, "tiny-three"))
     assert ref["message"] in md
@@ -246,21 +267,26 @@ def test_figures_are_pngs(report: dict) -> None:
 
 def test_resume_skips_finished_runs(report: dict, capsys: pytest.CaptureFixture) -> None:
     out, eng = report["out"], report["engine"]
-    npz = sorted((out / "trajectories").glob("*/*.npz"))
-    before = {p: p.stat().st_mtime_ns for p in npz}
+    # the campaign archives every run's trajectory beside the store; the report copies them
+    before = _archive(report)
+    assert len(before) == len(SCENARIOS) * 2
     rows_before = _csv(out)
     capsys.readouterr()
     assert main([a for a in report["argv"] if a != "--quiet"] + ["--resume"]) == 0
     said = capsys.readouterr().out
     assert "0 run, 6 reused" in said
-    assert {p: p.stat().st_mtime_ns for p in npz} == before
+    assert _archive(report) == before  # nothing rerun, nothing rewritten
     assert _csv(out) == rows_before
     # a changed knob re-runs that engine only
     knob = {"pymunk": "pymunk.iterations=7", "mujoco": "mujoco.iterations=7"}[eng]
     assert main(report["argv"] + ["--resume", "--set", knob]) == 0
-    after = {p: p.stat().st_mtime_ns for p in npz}
-    changed = {p.parent.name + "/" + p.stem for p in npz if after[p] != before[p]}
-    assert changed == {f"{s}/{_file(eng)}" for s in SCENARIOS}
+    after = _archive(report)
+    assert {p: after[p] for p in before} == before
+    hashes = {_row(_csv(out), s, eng)["scenario_hash"]: s for s in SCENARIOS}
+    changed = {hashes[p.parent.name] + "/" + p.stem.split("-")[0] for p in set(after) - set(before)}
+    assert changed == {f"{s}/{eng}" for s in SCENARIOS}
+    assert {_row(_csv(out), s, eng)["settings_hash"] for s in SCENARIOS} != {
+        _row(rows_before, s, eng)["settings_hash"] for s in SCENARIOS}
     # the same knob from a settings file (as `tune` writes it) is the same run
     tuned = report["tmp"] / "tuned.toml"
     tuned.write_text(f"[{eng}]\niterations = 7\n")
@@ -268,6 +294,7 @@ def test_resume_skips_finished_runs(report: dict, capsys: pytest.CaptureFixture)
     assert main([a for a in report["argv"] if a != "--quiet"]
                 + ["--resume", "--settings", str(tuned)]) == 0
     assert "0 run, 6 reused" in capsys.readouterr().out
+    assert _archive(report) == after
     assert f"--settings {tuned}" in (out / "report.md").read_text()
     # presets are chosen with --presets, not by a file
     tuned.write_text(f'[{eng}]\npreset = "accurate"\n')
@@ -291,17 +318,19 @@ def test_resume_reruns_a_torn_trajectory(report: dict, capsys: pytest.CaptureFix
     out, eng = report["out"], report["engine"]
     # other tests rewrite the files with other knobs: start from the fixture's settings
     assert main(report["argv"] + ["--resume"]) == 0
-    torn = out / "trajectories" / "tiny-pulse" / f"{_file(eng)}.npz"
+    torn = _archived(report, "tiny-pulse", eng)
     torn.write_bytes(torn.read_bytes()[:100])  # an interrupted write
-    empty = out / "trajectories" / "tiny-free" / f"{_file(eng)}.npz"
+    empty = _archived(report, "tiny-free", eng)
     empty.write_bytes(b"")
     capsys.readouterr()
     assert main([a for a in report["argv"] if a != "--quiet"] + ["--resume"]) == 0
     assert "2 run, 4 reused" in capsys.readouterr().out
     peak = float(_row(_csv(out), "tiny-pulse", eng)["peak_ratio_1"])
-    with np.load(torn) as f:  # rewritten whole
-        assert float(np.max(np.abs(f["theta_1"]))) / _lam(report, "tiny-pulse") == \
-            pytest.approx(peak, rel=1e-12)
+    for path in (torn, out / "trajectories" / "tiny-pulse" / f"{_file(eng)}.npz"):
+        with np.load(path) as f:  # rewritten whole, in the archive and in the report
+            assert float(np.max(np.abs(f["theta_1"]))) / _lam(report, "tiny-pulse") == \
+                pytest.approx(peak, rel=1e-12)
+    assert empty.stat().st_size > 0
 
 
 def test_colliding_scenario_names_are_refused(tmp_path: Path,
@@ -359,7 +388,7 @@ def test_sensitivity_maps_knobs() -> None:
     assert not shape.variations and "no collision-shape knob" in shape.skipped[0].reason
 
 
-def test_sensitivity_starts_from_each_engines_own_preset(tmp_path) -> None:
+def test_sensitivity_starts_from_each_engines_own_preset() -> None:
     import importlib
     import sys
     from pathlib import Path
@@ -376,13 +405,12 @@ def test_sensitivity_starts_from_each_engines_own_preset(tmp_path) -> None:
 
     register("own-start", OwnStart)
     try:
-        opts = CompareOptions(scenarios=[], engines=["own-start", "pymunk"], out=tmp_path,
-                              sensitivity=True)
+        opts = CompareOptions(scenarios=[], engines=["own-start", "pymunk"], sensitivity=True)
         starts = {r.method.engine: r.method.settings.get("preset") for r in _plan(opts)[0]
                   if r.method.variation}
         assert starts == {"own-start": "fast", "pymunk": "accurate"}
-        asked = CompareOptions(scenarios=[], engines=["own-start"], out=tmp_path,
-                               sensitivity=True, sensitivity_from="accurate")
+        asked = CompareOptions(scenarios=[], engines=["own-start"], sensitivity=True,
+                               sensitivity_from="accurate")
         assert {r.method.settings.get("preset") for r in _plan(asked)[0]
                 if r.method.variation} == {"accurate"}
     finally:

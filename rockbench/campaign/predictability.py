@@ -26,7 +26,7 @@ Definitions
   case is well posed over the whole run).
 
 :func:`predictability` runs the ensembles through
-:func:`rockbench.studies.references.references` (the one dispatcher,
+:func:`rockbench.campaign.references.references` (the one dispatcher,
 isolated, parallel or on Dask; members are cached in the results store by
 scenario content like every reference).
 """
@@ -40,10 +40,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from rockbench import analytic
+from rockbench.campaign.references import references
 from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario
 from rockbench.store import Store
-from rockbench.studies.references import references
 from rockbench.trajectory import Trajectory
 
 __all__ = ["Perturbation", "Predictability", "perturbed", "ensemble_scenarios", "spread_curve",
@@ -243,7 +243,7 @@ def predictability(
         trajs = [nom] + [refs[f"{s.name}~p{k}"] for k in range(1, members + 1)]
         done = [tr for tr in trajs if tr is not None]
         t = s.output_times()
-        curve = spread_curve(done, t, s.critical_angle)
+        curve = spread_curve(done, t, analytic.critical_angle(s.geometry))
         ends = {tr.status for tr in done}
         out[s.name] = Predictability(
             scenario=s.name, t_star=horizon_of(t, curve, fraction, s.duration),

@@ -7,18 +7,16 @@ cached by scenario content) the same way whichever study asks first.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 
-from rockbench import analytic
+from rockbench import analytic, provenance
 from rockbench.runner import ExecutionOptions, Job, run_jobs
 from rockbench.scenarios import Scenario
-from rockbench.store import Store
+from rockbench.store import Store, scenario_hash
 from rockbench.trajectory import Trajectory
 
-__all__ = ["references", "NO_MODEL"]
-
-#: Note of a scenario the analytic models do not cover.
-NO_MODEL = "no analytic model (more than two or off-centre blocks)"
+__all__ = ["references"]
 
 
 def references(
@@ -54,20 +52,46 @@ def references(
     notes: dict[str, str] = {}
     todo = []
     for sc in scenarios:
-        if not analytic.has_reference(sc):
+        why = analytic.coverage(sc)
+        if why:
             refs[sc.name] = None
-            notes[sc.name] = NO_MODEL
+            notes[sc.name] = why
             continue
-        cached = store.reference(sc) if store is not None else None
+        key = (scenario_hash(sc), provenance.code_version("reference"))
+        stored = store.reference(sc) if store is not None else None
+        cached = _MEMO.get(key) or stored
+        if cached is not None and store is not None and stored is None:
+            store.save_reference(sc, cached)  # known in this process: cache it in this store too
         if cached is not None:
-            refs[sc.name] = cached
+            refs[sc.name] = _MEMO[key] = _named(cached, sc.name)
         else:
             todo.append(Job(sc, "analytic", {}))
     for job, traj in zip(todo, run_jobs(todo, execution), strict=True):
         refs[job.scenario.name] = traj
         if traj.status.completed:
+            _remember((scenario_hash(job.scenario), provenance.code_version("reference")), traj)
             if store is not None:
                 store.save_reference(job.scenario, traj)
         else:
             notes[job.scenario.name] = f"reference {traj.status.value}: {traj.message}"
     return refs, notes
+
+
+#: References computed or read in this process, by scenario content and reference code
+#: (a study that asks again, like the tuner's rounds, does not recompute them).
+_MEMO: dict[tuple[str, str], Trajectory] = {}
+#: Largest number of references kept in :data:`_MEMO`.
+_MEMO_SIZE = 256
+
+
+def _remember(key: tuple[str, str], traj: Trajectory) -> None:
+    if len(_MEMO) >= _MEMO_SIZE:
+        _MEMO.pop(next(iter(_MEMO)))
+    _MEMO[key] = traj
+
+
+def _named(traj: Trajectory, name: str) -> Trajectory:
+    """``traj`` under the scenario name asked for (the same content may have two names)."""
+    if traj.scenario == name:
+        return traj
+    return dataclasses.replace(traj, scenario=name)

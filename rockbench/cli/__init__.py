@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import pkgutil
 import sys
 from collections.abc import Callable, Sequence
 from types import ModuleType
 from typing import NoReturn
 
-import rockbench
+from rockbench import provenance
 from rockbench.cli.common import memory_budget
 from rockbench.errors import RockbenchError
 
@@ -25,6 +26,20 @@ __all__ = ["main", "build_parser", "commands"]
 
 #: Commands listed first in ``--help``, in this order; the others follow by name.
 _FIRST = ("engines", "scenarios", "run", "compare", "matrix", "history")
+
+
+class _Version(argparse.Action):
+    """``--version``: the exact code (release, source hash, git commit), computed when asked."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str = argparse.SUPPRESS,
+                 **kwargs: object) -> None:
+        super().__init__(option_strings, dest, nargs=0,
+                         help="show rockbench's release and the exact code, then exit")
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: object, option_string: str | None = None) -> None:
+        print(provenance.describe())
+        parser.exit()
 
 
 class _Parser(argparse.ArgumentParser):
@@ -58,7 +73,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="rockbench", description=(
         "Benchmark rigid-block rocking in physics engines against Housner-type analytical "
         "solutions (Giordano et al. 2025)."))
-    parser.add_argument("--version", action="version", version=f"rockbench {rockbench.__version__}")
+    parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name, (help_text, configure, execute) in commands().items():
         p = sub.add_parser(name, help=help_text, description=help_text)
@@ -85,3 +100,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("rockbench: interrupted; results written so far are kept", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader of our output went away (``rockbench records --json | head``): stop
+        # quietly, and keep Python from failing again when it flushes stdout at exit
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141

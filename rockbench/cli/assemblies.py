@@ -14,10 +14,8 @@ results store.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import time
 from pathlib import Path
-from typing import Any
 
 from rockbench.cli.common import (
     Progress,
@@ -27,12 +25,12 @@ from rockbench.cli.common import (
     command_line,
     engine_settings,
     execution_options,
-    open_store,
     selected_engines,
+    store_path,
 )
 from rockbench.errors import RockbenchError
 
-__all__ = ["COMMANDS", "STUDY_SETTINGS", "DEFAULT_SCENARIOS", "configure_assemblies",
+__all__ = ["COMMANDS", "DEFAULT_SCENARIOS", "configure_assemblies",
            "execute_assemblies", "configure_collapse", "execute_collapse"]
 
 #: The commands of this module: name → one-line help.
@@ -41,15 +39,6 @@ COMMANDS = {
     "collapse": "pulse to collapse: smallest one-sine pulse that collapses each assembly",
 }
 
-#: Engine settings of the studies when none are given for an engine: pymunk at dt 0.1 ms
-#: (its fast preset moves early on the tilting table), MuJoCo and dem2d at their fast
-#: presets (onsets within 0.1 % and 3 % of the LP at a fraction of the accurate cost),
-#: Bullet at accurate (fast turns the thin arch 29 % early; accurate costs 0.6 CPU s per
-#: simulated s there), DART at fast (parapet and column within 3.2 %; its arches go
-#: unstable at fast and slide at its finer presets, at 11-43 CPU s per simulated s).
-STUDY_SETTINGS: dict[str, dict[str, Any]] = {
-    "pymunk": {"timestep": 1e-4}, "mujoco": {"preset": "fast"}, "dem2d": {"preset": "fast"},
-    "bullet": {}, "dart": {"preset": "fast"}}
 #: A small set of one assembly per family (the walls' small bricks cost the DEM µs steps).
 DEFAULT_SCENARIOS = "column-5drums,parapet-offset0.25,arch-9v-t0.20"
 
@@ -102,6 +91,7 @@ def _frequencies(text: str) -> list[float]:
 
 
 def _run(args: argparse.Namespace, *, tilting: bool) -> int:
+    from rockbench.engines import engine_class
     from rockbench.report.assembly_report import write_assembly_report
     from rockbench.scenarios import resolve_scenarios
     from rockbench.studies.collapse import pulse_to_collapse
@@ -122,27 +112,28 @@ def _run(args: argparse.Namespace, *, tilting: bool) -> int:
         raise RockbenchError("--engine selects no engine that builds assemblies")
     given = engine_settings(args, engines)
     explicit = bool(args.preset or args.settings_file or args.set_options)
-    settings = {e: (given.get(e, {}) if explicit else STUDY_SETTINGS.get(e, {}))
+    # without settings of their own each engine runs the preset it declares for assemblies
+    settings = {e: given.get(e, {}) if explicit else {"preset": engine_class(e).assembly_preset}
                 for e in engines}
     execution = execution_options(args, isolate=not args.no_isolate)
     out = Path(args.out)
     check_output_path(out / "results.csv", "--out")
-    store = open_store(args)
+    db = store_path(args)
     cmps = []
     study = None
-    with store if store is not None else contextlib.nullcontext():
-        if tilting:
-            with Progress(len(engines), "tilting engines") as bar:
-                for e in engines:
-                    cmps += tilting_table(scenarios, e, rate=args.rate, settings=settings[e],
-                                          execution=execution, store=store)
-                    bar.advance(e)
-        if not (tilting and args.no_collapse):
-            with Progress(len(scenarios) * len(engines) * len(freqs), "collapse runs") as bar:
-                study = pulse_to_collapse(
-                    scenarios, engines, freqs, settings=settings, rtol=args.rtol,
-                    max_factor=args.max_factor, execution=execution, store=store,
-                    on_result=lambda job, tr: bar.advance(f"{job.scenario.name} {job.engine}"))
+    if tilting:
+        with Progress(len(engines), "tilting engines") as bar:
+            for e in engines:
+                cmps += tilting_table(scenarios, e, rate=args.rate, settings=settings[e],
+                                      execution=execution, db=db)
+                bar.advance(e)
+    if not (tilting and args.no_collapse):
+        with Progress(len(scenarios) * len(engines) * len(freqs), "collapse runs") as bar:
+            study = pulse_to_collapse(
+                scenarios, engines, freqs, settings=settings, rtol=args.rtol,
+                max_factor=args.max_factor, execution=execution, db=db,
+                on_result=lambda res, _: bar.advance(
+                    f"{res.scenario.name} {res.method.engine}"))
     files = write_assembly_report(out, scenarios, cmps, study, command=command_line(args),
                                   wall_time=time.perf_counter() - start,
                                   embed=not args.link_figures)

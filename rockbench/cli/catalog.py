@@ -56,6 +56,7 @@ def execute_scenarios(args: argparse.Namespace) -> int:
     from rich.console import Console
     from rich.table import Table
 
+    from rockbench import analytic
     from rockbench.scenarios import catalog, get_scenario, get_suite, scenario_to_dict, suites
 
     if args.show:
@@ -74,8 +75,8 @@ def execute_scenarios(args: argparse.Namespace) -> int:
                                                 if k in ("frequency", "amplitude"))
         if s.initial_tilt:
             desc += f" tilt={s.initial_tilt} λ"
-        table.add_row(n, str(s.n_blocks), f"{s.critical_angle:.4f}", desc,
-                      f"{s.uplift_ratio:.2f}" if not s.excitation.is_free else "-",
+        table.add_row(n, str(s.n_blocks), f"{analytic.critical_angle(s.geometry):.4f}", desc,
+                      f"{analytic.uplift_ratio(s):.2f}" if not s.motion.is_free else "-",
                       f"{s.duration:g}")
     console = Console(width=120)
     console.print(table)

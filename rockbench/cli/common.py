@@ -22,7 +22,7 @@ __all__ = ["command_line", "selected_engines", "add_engine_arguments", "memory_b
            "add_settings_arguments", "engine_settings", "Progress",
            "add_run_arguments", "add_store_arguments", "add_parallel_arguments",
            "add_worker_arguments",
-           "check_parallel_arguments", "execution_options", "open_store", "check_output_path"]
+           "check_parallel_arguments", "execution_options", "store_path", "check_output_path"]
 
 
 # ---------------------------------------------------------------------- engines and settings
@@ -185,10 +185,12 @@ def check_parallel_arguments(args: argparse.Namespace) -> None:
     The one validation of every command (:func:`rockbench.runner.check_execution`);
     a ``--timeout`` left at None means the study's own default limit.
     """
-    from rockbench.runner import DEFAULT_TIMEOUT, check_execution
+    from rockbench.runner import DEFAULT_TIMEOUT, check_execution, default_jobs
 
     timeout = getattr(args, "timeout", None)
-    check_execution(getattr(args, "jobs", 1), DEFAULT_TIMEOUT if timeout is None else timeout,
+    jobs = getattr(args, "jobs", None)
+    check_execution(default_jobs() if jobs is None else jobs,
+                    DEFAULT_TIMEOUT if timeout is None else timeout,
                     getattr(args, "executor", "process"), getattr(args, "scheduler", None),
                     flag="--")
 
@@ -201,21 +203,23 @@ def execution_options(args: argparse.Namespace, *, isolate: bool = True) -> Any:
     ExecutionError
         A bad ``--jobs``, ``--timeout``, ``--executor`` or ``--scheduler`` (named as flags).
     """
-    from rockbench.runner import DEFAULT_TIMEOUT, ExecutionOptions
+    from rockbench.runner import DEFAULT_TIMEOUT, ExecutionOptions, default_jobs
 
     check_parallel_arguments(args)
     timeout = getattr(args, "timeout", None)
     memory = getattr(args, "worker_memory", None)
     extra = {} if memory is None else {"worker_memory": memory}
-    return ExecutionOptions(jobs=getattr(args, "jobs", 1),
+    jobs = getattr(args, "jobs", None)
+    return ExecutionOptions(jobs=default_jobs() if jobs is None else jobs,
                             timeout=DEFAULT_TIMEOUT if timeout is None else timeout,
                             executor=getattr(args, "executor", "process"),
                             scheduler=getattr(args, "scheduler", None) or None,
                             isolate=isolate, warm=not getattr(args, "no_warm", False), **extra)
 
 
-def open_store(args: argparse.Namespace) -> Any:
-    """The results store named by ``--db`` (None with ``--no-db``).
+def store_path(args: argparse.Namespace) -> Path | None:
+    """The results store named by ``--db`` (None with ``--no-db``), checked before a
+    study runs: opened once (created if missing) and closed.
 
     Raises
     ------
@@ -224,7 +228,10 @@ def open_store(args: argparse.Namespace) -> Any:
     """
     from rockbench.store import Store
 
-    return None if getattr(args, "no_db", False) else Store(args.db)
+    if getattr(args, "no_db", False):
+        return None
+    Store(args.db).close()
+    return Path(args.db)
 
 
 def check_output_path(path: str | Path, flag: str) -> Path:

@@ -55,15 +55,17 @@ def configure_compare(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", "-o", required=True, metavar="DIR",
                    help="report directory (index.html, report.md, results.csv, "
                         "trajectories/, figures/)")
-    p.add_argument("--jobs", "-j", type=int, default=1, metavar="N",
-                   help="parallel worker processes (default 1: clean, uncontended timings)")
+    p.add_argument("--jobs", "-j", type=int, default=None, metavar="N",
+                   help="parallel worker processes (default: the usable cores; 1 gives "
+                        "uncontended timings)")
     p.add_argument("--timeout", type=float, default=None, metavar="S",
                    help="wall-time limit per run in s (default: 300 s + 60 s per simulated "
                         "second, generous)")
     p.add_argument("--resume", action="store_true",
-                   help="reuse finished runs found in the results store (same scenario, "
-                        "settings, engine and rockbench versions) whose trajectory file is "
-                        "intact; crashed, timed-out and torn runs are redone")
+                   help="reuse finished runs found in the results store (same scenario "
+                        "content, engine and library version, resolved settings and code "
+                        "version) whose trajectory file is intact; crashed, timed-out and "
+                        "torn runs are redone")
     add_store_arguments(p)
     p.add_argument("--sensitivity", action="store_true",
                    help=f"also run the sensitivity study on B0 (the {SUITE} pseudo-suite)")
@@ -88,6 +90,7 @@ def execute_compare(args: argparse.Namespace) -> int:
     from rockbench.engines import engine_class
     from rockbench.method import REFERENCE
     from rockbench.report.compare_report import write_report
+    from rockbench.report.options import ReportOptions
     from rockbench.scenarios import get_scenario, get_suite, resolve_scenarios, suites
     from rockbench.studies.compare import CompareOptions, run_comparison
     from rockbench.studies.sensitivity import SUITE
@@ -142,22 +145,22 @@ def execute_compare(args: argparse.Namespace) -> int:
         check_output_path(args.db, "--db")
     label = args.suite or "custom"
     opts = CompareOptions(
-        scenarios=scenarios, engines=[e for e in engines if e != REFERENCE], out=out,
+        scenarios=scenarios, engines=[e for e in engines if e != REFERENCE],
         presets=presets, overrides=overrides, timeout=args.timeout,
         execution=execution,
         resume=args.resume, db=None if args.no_db else Path(args.db),
         sensitivity=sensitivity,
         # the Table 2 variations start from the preset asked for, else each engine's own
         sensitivity_from=presets[0] if (args.preset or args.presets) else None,
-        suite=label, command=command_line(args), embed_figures=not args.link_figures,
-        ensemble=args.ensemble,
+        suite=label, ensemble=args.ensemble,
         **({} if args.horizon_members is None else {"horizon_members": args.horizon_members}))
 
     def progress(total: int, description: str) -> Progress:
         return Progress(total, description, quiet=args.quiet)
 
     result = run_comparison(opts, progress=None if args.quiet else progress)
-    files = write_report(result)
+    files = write_report(result, ReportOptions(out, command=command_line(args),
+                                               embed_figures=not args.link_figures))
     if not args.quiet:
         counts: dict[str, int] = {}
         for r in result.results:

@@ -85,7 +85,7 @@ def configure_fragility(p: argparse.ArgumentParser) -> None:
 
 
 def _scenario(args: argparse.Namespace) -> Scenario:
-    from rockbench.scenarios import Block, Scenario, Stack, get_scenario
+    from rockbench.scenarios import Block, Scenario, get_scenario, single
 
     if args.scenario:
         return get_scenario(args.scenario)
@@ -94,7 +94,7 @@ def _scenario(args: argparse.Namespace) -> Scenario:
     except ValueError:
         raise RockbenchError(f"--block takes WIDTH,HEIGHT in m, got {args.block!r}") from None
     block = Block(width, width, height, density=BLOCK_DENSITY)
-    return Scenario(f"block-{width:g}x{height:g}", Stack((block,)),
+    return Scenario(f"block-{width:g}x{height:g}", single(block),
                     description=f"block {width:g} m × {height:g} m, {BLOCK_DENSITY:g} kg/m³")
 
 

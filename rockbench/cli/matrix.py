@@ -13,8 +13,8 @@ from rockbench.cli.common import (
     check_output_path,
     engine_settings,
     execution_options,
-    open_store,
     selected_engines,
+    store_path,
 )
 from rockbench.errors import RockbenchError
 
@@ -89,23 +89,19 @@ def execute_matrix(args: argparse.Namespace) -> int:
     if tolerances.suite and tolerances.suite != args.suite:
         print(f"rockbench: note: {tolerances.source} was calibrated for suite "
               f"{tolerances.suite!r}, not {args.suite!r}", file=sys.stderr)
-    store = open_store(args)
-    try:
-        with Progress(len(scenarios) * len(engines), "matrix") as bar:
-            def on_cell(cell: Any) -> None:
-                bar.advance(f"{cell.engine} × {cell.scenario}")
-                if not sys.stderr.isatty():
-                    print(f"[{bar.done}/{bar.total}] {cell.engine} × {cell.scenario}: "
-                          f"{cell.status.value}" + (" (stored)" if cell.reused else ""),
-                          file=sys.stderr, flush=True)
+    db = store_path(args)
+    with Progress(len(scenarios) * len(engines), "matrix") as bar:
+        def on_cell(cell: Any) -> None:
+            bar.advance(f"{cell.engine} × {cell.scenario}")
+            if not sys.stderr.isatty():
+                print(f"[{bar.done}/{bar.total}] {cell.engine} × {cell.scenario}: "
+                      f"{cell.status.value}" + (" (stored)" if cell.reused else ""),
+                      file=sys.stderr, flush=True)
 
-            result = run_matrix(scenarios, engines, tolerances, settings=settings,
-                                suite=args.suite, store=store, baseline=baseline,
-                                resume=args.resume, execution=execution, on_cell=on_cell,
-                                **horizon)
-    finally:
-        if store is not None:
-            store.close()
+        result = run_matrix(scenarios, engines, tolerances, settings=settings,
+                            suite=args.suite, db=db, baseline=baseline,
+                            resume=args.resume, execution=execution, on_cell=on_cell,
+                            **horizon)
     _show(result)
     if args.junit:
         from rockbench.report.junit import write_junit
@@ -117,8 +113,8 @@ def execute_matrix(args: argparse.Namespace) -> int:
         data = baseline_data({c.key: (c.status, c.settings, c.metrics)
                               for c in result.cells.values()}, result.suite)
         print(f"wrote {write_baseline(data, args.write_baseline)}")
-    if store is not None:
-        print(f"results appended to {args.db}")
+    if db is not None:
+        print(f"results appended to {db}")
     return result.exit_code
 
 
@@ -144,7 +140,8 @@ def _show(result: Any) -> None:
 _HISTORY_METRICS = ("max_error", "impact_time_error", "peak_error", "wall_time")
 #: The ``kind`` of every study that records runs (its module's ``KIND``).
 #: Studies that record runs (``kind`` in the store); a plugin study may add its own.
-STUDY_KINDS = ("compare", "matrix", "sweep", "tune", "fragility", "tilting", "collapse")
+STUDY_KINDS = ("compare", "matrix", "sweep", "tune", "fragility", "tilting", "collapse",
+               "ensemble")
 
 
 def configure_history(p: argparse.ArgumentParser) -> None:
@@ -189,7 +186,16 @@ def execute_history(args: argparse.Namespace) -> int:
     from rich.markup import escape
     from rich.table import Table
 
+    from rockbench import provenance
     from rockbench.store import Store
+
+    current = provenance.code_version("run")
+
+    def made_by(r: Any) -> str:
+        """The code that made a run: this code, other code, or an older rockbench."""
+        if not r.code_version:
+            return f"{r.rockbench_version} (older code)"
+        return "this code" if r.code_version == current else r.code_version
 
     if args.limit < 1:
         raise RockbenchError(f"--limit must be >= 1, got {args.limit}")
@@ -213,7 +219,7 @@ def execute_history(args: argparse.Namespace) -> int:
             cells.setdefault((r.scenario, r.method), []).append(r)
         for (s, method), rs in sorted(cells.items()):
             last = rs[-1]
-            versions = sorted({f"{r.engine_version}/{r.rockbench_version}" for r in rs})
+            versions = sorted({f"{r.engine_version}/{made_by(r)}" for r in rs})
             kinds = ",".join(sorted({r.kind for r in rs}))
             table.add_row(escape(s), escape(method), str(len(rs)), kinds, last.status.value,
                           _cell(_value(last, "max_error")), last.timestamp, " ".join(versions))
@@ -224,7 +230,7 @@ def execute_history(args: argparse.Namespace) -> int:
     for method in sorted({r.method for r in runs}):
         rows = [r for r in runs if r.method == method][-args.limit:]
         table = Table(title=escape(f"{args.scenario} on {method}: {len(rows)} run(s)"))
-        for col in ("time (UTC)", "kind", "rockbench", "engine version", "settings", "status",
+        for col in ("time (UTC)", "kind", "made by", "engine version", "settings", "status",
                     *names, "Δ " + names[0]):
             table.add_column(col, justify="right" if col in names else "left")
         prev = None
@@ -235,7 +241,7 @@ def execute_history(args: argparse.Namespace) -> int:
                 delta = f"{100 * (cur - prev) / abs(prev):+.0f}%"
             settings = " ".join(f"{k}={_cell(v)}" for k, v in r.settings.items()) or "default"
             status = r.status.value + ("" if r.metrics is not None else " (metrics unreadable)")
-            table.add_row(r.timestamp.replace("+00:00", ""), r.kind, r.rockbench_version,
+            table.add_row(r.timestamp.replace("+00:00", ""), r.kind, made_by(r),
                           r.engine_version, escape(settings), status,
                           *[_cell(_value(r, n)) for n in names], delta)
             prev = cur if cur is not None else prev

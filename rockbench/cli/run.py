@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
 from rockbench.cli.common import (
     Progress,
@@ -60,9 +61,10 @@ def execute_run(args: argparse.Namespace) -> int:
     from rich.table import Table
 
     from rockbench import analytic
-    from rockbench.evaluation import evaluate_run
-    from rockbench.runner import Job, run_jobs
+    from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
+    from rockbench.method import Method
     from rockbench.scenarios import get_scenario, scenario_to_dict
+    from rockbench.studies.verify import verdict_of
 
     execution = execution_options(args, isolate=not args.no_isolate)
     scenario = get_scenario(args.scenario)
@@ -72,29 +74,25 @@ def execute_run(args: argparse.Namespace) -> int:
         for e in engines:
             _check_out(_out_path(args.out, e, len(engines) > 1))
     has_ref = analytic.has_reference(scenario)
-    if has_ref and "analytic" not in engines:
-        engines_run = ["analytic", *engines]
-        settings["analytic"] = {}
-    else:
-        engines_run = engines
-    jobs = [Job(scenario, e, settings[e]) for e in engines_run]
+    plan = [PlannedRun(scenario, Method.of(e, settings[e])) for e in engines if e != "analytic"]
+    if "analytic" in engines or has_ref:
+        plan.insert(0, PlannedRun(scenario, Method.reference()))
     written: list[str] = []
 
-    def save(job: Job, traj: object) -> None:
-        if args.out and job.engine in engines:
-            path = _out_path(args.out, job.engine, len(engines) > 1)
-            traj.save(path, scenario=scenario_to_dict(scenario))  # type: ignore[attr-defined]
-            written.append(str(path))
+    with Progress(len(plan), scenario.name) as bar:
+        def on_result(res: Any, traj: Any) -> None:
+            engine = res.method.engine
+            if args.out and engine in engines and traj is not None:
+                path = _out_path(args.out, engine, len(engines) > 1)
+                traj.save(path, scenario=scenario_to_dict(scenario))
+                written.append(str(path))
+            bar.advance(engine)
 
-    with Progress(len(jobs), scenario.name) as bar:
-        def on_result(job: Job, traj: object) -> None:
-            save(job, traj)
-            bar.advance(job.engine)
-
-        trajs = run_jobs(jobs, execution, on_result=on_result)
-    by_engine = dict(zip(engines_run, trajs, strict=True))
-    ref = by_engine.get("analytic") if has_ref else None
-    lam = scenario.critical_angle
+        campaign = run_campaign(plan, CampaignOptions(kind="run", keep=True,
+                                                      execution=execution,
+                                                      timeout=execution.timeout),
+                                on_result=on_result)
+    lam = analytic.critical_angle(scenario.geometry)
     table = Table(title=f"{scenario.name}  (λ = {lam:.4f} rad)")
     table.add_column("engine")
     table.add_column("status")
@@ -103,17 +101,21 @@ def execute_run(args: argparse.Namespace) -> int:
     table.add_column("max|Δθ|/λ vs analytic", justify="right")
     table.add_column("wall (s)", justify="right")
     table.add_column("note")
-    for name, traj in by_engine.items():
-        if name == "analytic" and name not in engines:
-            label = "analytic (reference)"
-        else:
-            label = name
-        m = evaluate_run(scenario, traj, ref, is_reference=traj is ref)
-        table.add_row(label, str(traj.status), *[_fmt(p) for p in m.peaks],
-                      _fmt(m.max_error), f"{m.wall_time:.3f}", traj.message)
+    for res in campaign.results:
+        name = res.method.engine
+        label = "analytic (reference)" if name == "analytic" and name not in engines else name
+        m = res.metrics
+        table.add_row(label, m.status.value, *[_fmt(p) for p in m.peaks],
+                      _fmt(m.max_error), f"{m.wall_time:.3f}", m.message)
     Console(width=140).print(table)
     for w in written:
         print(f"wrote {w}")
+    if [r for r in campaign.results if not r.method.is_reference]:
+        verdict, _ = verdict_of(campaign.results, campaign.references)
+        print("verdict: " + "\n         ".join(verdict.lines()))
+        if not has_ref:
+            print(f"no closed form covers {scenario.name}: `rockbench verify {args.scenario} "
+                  f"--engine {args.engine}` judges the engines against a consensus")
     return 0
 
 

@@ -16,8 +16,8 @@ from rockbench.cli.common import (
     check_output_path,
     engine_settings,
     execution_options,
-    open_store,
     selected_engines,
+    store_path,
 )
 from rockbench.errors import RockbenchError
 
@@ -94,16 +94,12 @@ def execute_sweep(args: argparse.Namespace) -> int:
     # a scenario name is not a path: its slug names the default folder
     out = Path(args.out or f"sweep-{slug(scenario.name)}")
     check_output_path(out / "sweep.csv", "--out")
-    store = open_store(args)
-    try:
-        with Progress(n, f"sweep {scenario.name}") as bar:
-            result = run_sweep(scenario, grid, base=base, metric=args.metric, store=store,
-                               resume=args.resume, execution=execution,
-                               on_point=lambda p: _progress_line(
-                                   bar, f"{p.engine} {_knob_text(p.knobs)}: {p.status.value}"))
-    finally:
-        if store is not None:
-            store.close()
+    db = store_path(args)
+    with Progress(n, f"sweep {scenario.name}") as bar:
+        result = run_sweep(scenario, grid, base=base, metric=args.metric, db=db,
+                           resume=args.resume, execution=execution,
+                           on_point=lambda p: _progress_line(
+                               bar, f"{p.engine} {_knob_text(p.knobs)}: {p.status.value}"))
     if result.reference_note:
         print(f"note: {result.reference_note}; errors are not available")
     print(format_table(result, args.target), end="")
@@ -167,17 +163,13 @@ def execute_tune(args: argparse.Namespace) -> int:
     engine = engines[0]
     out = check_output_path(args.out or f"tuned-{engine}.toml", "--out")
     base = engine_settings(args, engines)[engine]
-    store = open_store(args)
-    try:
-        with Progress(args.budget, f"tune {engine}") as bar:
-            res = tune(scenario, engine, args.target, knobs=args.knob, base=base,
-                       metric=args.metric, budget=args.budget, store=store,
-                       execution=execution, on_point=lambda p: _progress_line(
-                           bar, f"{_knob_text(p.knobs)}: {p.status.value} "
-                                f"{args.metric}={p.error(args.metric):.3g}"))
-    finally:
-        if store is not None:
-            store.close()
+    db = store_path(args)
+    with Progress(args.budget, f"tune {engine}") as bar:
+        res = tune(scenario, engine, args.target, knobs=args.knob, base=base,
+                   metric=args.metric, budget=args.budget, db=db,
+                   execution=execution, on_point=lambda p: _progress_line(
+                       bar, f"{_knob_text(p.knobs)}: {p.status.value} "
+                            f"{args.metric}={p.error(args.metric):.3g}"))
     for p in sorted(res.evaluated, key=lambda p: p.cost):
         e = p.error(args.metric)
         mark = "*" if res.best is p else " "

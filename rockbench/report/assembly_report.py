@@ -32,8 +32,8 @@ from matplotlib.figure import Figure
 from matplotlib.patches import FancyArrow, Polygon, Rectangle
 from matplotlib.ticker import NullFormatter
 
-import rockbench
-from rockbench.analytic.limit_analysis import LimitResult
+from rockbench import provenance
+from rockbench.analytic.static_collapse import LimitResult
 from rockbench.report.document import (
     Document,
     FigureItem,
@@ -44,7 +44,6 @@ from rockbench.report.document import (
 from rockbench.report.html import render_document_html
 from rockbench.report.tables import Cell, Table
 from rockbench.scenarios import Scenario
-from rockbench.scenarios.assembly import Assembly
 from rockbench.studies.collapse import (
     FREE_TIME,
     RESIDUAL_DISPLACEMENT,
@@ -59,7 +58,7 @@ __all__ = ["AssemblyDrawing", "block_polygons", "draw_assembly", "assembly_figur
            "collapse_figure", "write_assembly_report", "CITATION"]
 
 CITATION = ("the paper's closing question: physics engines against DEM for multi-block "
-            "dry-joint systems, up to collapse (issue 18)")
+            "dry-joint systems, up to collapse")
 _DPI = 110
 _BLOCK = "#d9d4c7"
 _MOVING = "#f0a04b"
@@ -90,11 +89,8 @@ class AssemblyDrawing:
 
 def block_polygons(scenario: Scenario) -> list[np.ndarray]:
     """World corners (x, z) of every block at rest, counter-clockwise."""
-    stack = scenario.stack
-    if isinstance(stack, Assembly):
-        return [stack.world_vertices(i) for i in range(len(stack.blocks))]
-    return [np.asarray(c) + np.asarray(b.profile()) for b, c in zip(
-        stack.blocks, stack.centroids, strict=True)]
+    geo = scenario.geometry
+    return [geo.world_vertices(i) for i in range(geo.n_bodies)]
 
 
 def _governing(scenario: Scenario) -> LimitResult | None:
@@ -115,7 +111,7 @@ def draw_assembly(ax: Axes, scenario: Scenario, limit: LimitResult | None) -> As
     for i, p in enumerate(polys):
         ax.add_patch(Polygon(p, closed=True, facecolor=_MOVING if i in moving else _BLOCK,
                              edgecolor="black", linewidth=0.8))
-    supports = list(getattr(scenario.stack, "supports", ()))
+    supports = list(scenario.geometry.supports)
     for s in supports:
         ax.add_patch(Polygon(s.array, closed=True, facecolor="white", edgecolor=_SUPPORT,
                              hatch="///", linewidth=0.8))
@@ -402,7 +398,7 @@ def write_assembly_report(out: Path, scenarios: Sequence[Scenario],
             "machine."], [_cost_table(tilting, collapse)]))
     header = [("Date", time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())),
               ("Machine", cpu_model()), ("Python", platform.python_version()),
-              ("rockbench", rockbench.__version__)]
+              ("rockbench", provenance.describe())]
     if wall_time is not None:
         header.append(("Wall time", f"{wall_time:.1f} s"))
     if command:

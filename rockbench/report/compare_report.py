@@ -1,5 +1,6 @@
 """The comparison report: ``index.html`` and ``report.md`` from a :class:`CompareResult`,
-and ``results.csv`` (one row per run, :mod:`rockbench.report.results_csv`).
+``results.csv`` (one row per run, :mod:`rockbench.report.results_csv`) and every run's
+time history under ``trajectories/``.
 
 Everything here is drawn from the typed results of
 :func:`rockbench.studies.compare.run_comparison`; nothing is simulated or
@@ -8,6 +9,7 @@ measured here.
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as _dt
 import math
 import time
@@ -16,7 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-import rockbench
+from rockbench import provenance
+from rockbench.analytic import critical_angle
 from rockbench.evaluation import RunResult
 from rockbench.method import REFERENCE, Method, slug
 from rockbench.report.comparison import (
@@ -46,10 +49,12 @@ from rockbench.report.figures import (
 )
 from rockbench.report.groups import group_title, scenario_group
 from rockbench.report.html import render_document_html
+from rockbench.report.options import ReportOptions
 from rockbench.report.paper import citation, paper_tables
 from rockbench.report.results_csv import ResultsWriter
 from rockbench.report.sensitivity_report import sensitivity_figures, sensitivity_table
-from rockbench.scenarios import Scenario
+from rockbench.report.verdict_report import verdict_section
+from rockbench.scenarios import Scenario, scenario_to_dict
 from rockbench.studies import sensitivity as sens
 from rockbench.studies.compare import CompareResult
 from rockbench.trajectory import Status
@@ -57,22 +62,45 @@ from rockbench.trajectory import Status
 __all__ = ["write_report", "write_results_csv"]
 
 
-def write_results_csv(result: CompareResult) -> Path:
-    """``results.csv``: one row per run, in report order (written atomically)."""
-    out = Path(result.options.out)
+def trajectory_file(r: RunResult) -> str:
+    """Where a run's time history lies in the report folder (relative path)."""
+    return f"trajectories/{slug(r.scenario.name)}/{r.method.slug}.npz"
+
+
+def write_trajectories(result: CompareResult, out: Path) -> list[RunResult]:
+    """Every run's time history under ``out/trajectories`` (``.npz`` + ``.json`` sidecar,
+    atomically); returns the results with their file in the report."""
+    rows = []
+    for r in result.results:
+        traj = result.trajectories.get(r.key)
+        if traj is None:
+            rows.append(dataclasses.replace(r, trajectory=""))
+            continue
+        traj.extra = {**traj.extra, "method": r.method.label, "variation": r.method.variation}
+        traj.save(out / trajectory_file(r), scenario=scenario_to_dict(r.scenario))
+        rows.append(dataclasses.replace(r, trajectory=trajectory_file(r)))
+    return rows
+
+
+def write_results_csv(result: CompareResult, out: Path,
+                      rows: Sequence[RunResult] | None = None) -> Path:
+    """``results.csv`` in ``out``: one row per run, in report order (written atomically)."""
     max_blocks = max([r.scenario.n_blocks for r in result.runs] + [1])
     writer = ResultsWriter(out / "results.csv", max_blocks)
-    writer.rewrite(result.results)
+    writer.rewrite(result.results if rows is None else rows)
     return writer.path
 
 
-def write_report(result: CompareResult, start: float | None = None) -> list[Path]:
-    """Write ``results.csv``, ``index.html`` and ``report.md`` (and the figures).
+def write_report(result: CompareResult, options: ReportOptions,
+                 start: float | None = None) -> list[Path]:
+    """Write ``results.csv``, ``index.html``, ``report.md``, the figures and trajectories.
 
     Parameters
     ----------
     result : CompareResult
         From :func:`rockbench.studies.compare.run_comparison`.
+    options : ReportOptions
+        The report folder, the command shown, whether figures are embedded.
     start : float, optional
         ``time.perf_counter()`` when the study began (the header's total wall
         time); default: the study's own wall time.
@@ -80,11 +108,12 @@ def write_report(result: CompareResult, start: float | None = None) -> list[Path
     Returns
     -------
     list of Path
-        The files written (figures excluded).
+        The files written (figures and trajectories excluded).
     """
-    files = [write_results_csv(result)]
-    files += write_ensemble_files(result)
-    files += _write_document(result, start)
+    out = Path(options.out)
+    files = [write_results_csv(result, out, write_trajectories(result, out))]
+    files += write_ensemble_files(result, out)
+    files += _write_document(result, options, start)
     return files
 
 
@@ -102,14 +131,23 @@ def _speed_points(rows: Sequence[RunResult], methods: Sequence[str]) -> list[Spe
         else:  # nothing completed: place the cross at wall time per requested second
             dur = sum(r.metrics.duration for r in rs)
             cost = sum(r.metrics.wall_time for r in rs) / dur if dur > 0 else math.nan
-        ok = [r.metrics for r in rs if r.status is Status.OK]
-        errs = [x.max_error for x in ok if x.max_error is not None]
-        peaks = [abs(v) for x in ok for v in x.peak_errors if v is not None]
+        # a run that ends as its reference does (overturning where it overturns) is
+        # compared; its error before the overturning is measured
+        agree = [r.metrics for r in rs if _ends_as_reference(r)]
+        errs = [x.max_error for x in agree if x.max_error is not None]
+        peaks = [abs(v) for x in agree for v in x.peak_errors if v is not None]
         points.append(SpeedPoint(
             method=m, cost=cost, error=float(np.median(errs)) if errs else math.nan,
             peak_error=float(np.median(peaks)) if peaks else math.nan,
-            failed=sum(r.status is not Status.OK for r in rs), total=len(rs)))
+            failed=len(rs) - len(agree), total=len(rs), compared=len(errs)))
     return points
+
+
+def _ends_as_reference(r: RunResult) -> bool:
+    """The run completed and ended as its reference (or as ok where there is none)."""
+    m = r.metrics
+    ref = m.reference_status if m.reference_status is not None else Status.OK
+    return m.status.completed and m.status is ref
 
 
 def _history_methods(result: CompareResult) -> list[str]:
@@ -130,9 +168,10 @@ def _group_scenarios(scenarios: Sequence[Scenario]) -> dict[str, list[Scenario]]
     return groups
 
 
-def _write_document(result: CompareResult, start: float | None) -> list[Path]:
+def _write_document(result: CompareResult, options: ReportOptions,
+                    start: float | None) -> list[Path]:
     opts = result.options
-    out = Path(opts.out)
+    out = Path(options.out)
     rows = result.results
     methods = [m.label for m in result.methods]
     main_rows = [r for r in rows if not r.method.variation]
@@ -145,6 +184,8 @@ def _write_document(result: CompareResult, start: float | None) -> list[Path]:
         return FigureItem(path=str(path.relative_to(out)), caption=caption, title=title)
 
     groups = _group_scenarios(opts.scenarios)
+    if result.verdict is not None:
+        sections.append(verdict_section(result.verdict, ctx.next_number))
     if opts.scenarios:
         ov = Section("overview", "Overview: accuracy and cost per method")
         ov.paragraphs.append(
@@ -164,8 +205,10 @@ def _write_document(result: CompareResult, start: float | None) -> list[Path]:
                 "(a) max |θ − θ_ref|/λ and (b) |Δpeak|/peak against the analytic reference. "
                 "Points with a black edge lie on the Pareto front (dashed): no other method is "
                 "both faster and more accurate. Methods with no successful comparison are "
-                "crosses on the top edge; '(k/n not ok)' counts runs that failed, overturned or "
-                "were unsupported."), "Accuracy versus speed"))
+                "crosses on the top edge; '(k/n unlike the reference)' counts runs that did not "
+                "end as the reference did (an overturning the reference shares is compared "
+                "up to it), '[k of n scenarios]' how many scenarios stand behind a point "
+                "when not all do."), "Accuracy versus speed"))
         sections.append(ov)
     for group, scen in groups.items():
         sec = Section(f"group-{group}", group_title(group))
@@ -210,7 +253,7 @@ def _write_document(result: CompareResult, start: float | None) -> list[Path]:
                 + "; a cross marks where a run stopped (overturned, unstable, crashed)."),
                 f"Time history, {s.name}"))
         sections.append(sec)
-    psec = predictability_section(result, fig, ctx.next_number) if opts.scenarios else None
+    psec = predictability_section(result, out, fig, ctx.next_number) if opts.scenarios else None
     if psec is not None:
         sections.append(psec)
     if opts.scenarios:
@@ -224,7 +267,7 @@ def _write_document(result: CompareResult, start: float | None) -> list[Path]:
         tsec.items.append(timing_table(ctx))
         sections.append(tsec)
     if result.b0 is not None:
-        sections.append(_sensitivity_section(result, fig, ctx.next_number()))
+        sections.append(_sensitivity_section(result, out, fig, ctx.next_number()))
     sections.append(_files_section(rows))
     first = opts.scenarios[0].name if opts.scenarios else ""
     settings_desc = "; ".join(f"{r.method.label}: {r.metrics.settings_hash}" for r in main_rows
@@ -239,14 +282,14 @@ def _write_document(result: CompareResult, start: float | None) -> list[Path]:
         ("Total wall time", _hms(total)),
         ("Runs", f"{result.ran} run now, {result.reused} reused from a previous run "
                  "(--resume)"),
-        ("rockbench", rockbench.__version__),
+        ("rockbench", provenance.describe()),
         ("Python", python_version()),
         ("Machine (CPU)", cpu_model()),
         ("Engine versions", versions),
         ("Presets", ", ".join(opts.presets)
          + (f"; overrides {opts.overrides}" if any(opts.overrides.values()) else "")),
         ("Settings hashes", settings_desc or "–"),
-        ("Command", opts.command or "(Python API)"),
+        ("Command", options.command or "(Python API)"),
     ]
     doc = Document(
         title=f"rockbench comparison report — {opts.suite or 'custom suite'}",
@@ -260,7 +303,8 @@ def _write_document(result: CompareResult, start: float | None) -> list[Path]:
     md = out / "report.md"
     md.write_text(render_document_markdown(doc), encoding="utf-8")
     index = out / "index.html"
-    index.write_text(render_document_html(doc, out, embed=opts.embed_figures), encoding="utf-8")
+    index.write_text(render_document_html(doc, out, embed=options.embed_figures),
+                     encoding="utf-8")
     return [index, md]
 
 
@@ -271,7 +315,7 @@ def _group_intro(group: str, scen: Sequence[Scenario]) -> str:
                 "20 s). Housner's equation with η = 1 − 2mb²/I_O is the reference; an engine "
                 "that dissipates too little keeps rocking, one that dissipates too much stops "
                 "early.")
-    text = (f"{len(scen)} case(s); λ = {s.critical_angle:.4f} rad for the first "
+    text = (f"{len(scen)} case(s); λ = {critical_angle(s.geometry):.4f} rad for the first "
             f"({s.name}). ")
     from rockbench.report.paper import is_catalog_case
 
@@ -290,9 +334,9 @@ def _group_intro(group: str, scen: Sequence[Scenario]) -> str:
     return text
 
 
-def _sensitivity_section(result: CompareResult, fig: Callable[..., FigureItem],
+def _sensitivity_section(result: CompareResult, out: Path, fig: Callable[..., FigureItem],
                          number: int) -> Section:
-    out, b0 = Path(result.options.out), result.b0
+    b0 = result.b0
     assert b0 is not None
     variations, skipped = result.variations, result.skipped
     sec = Section("sensitivity", "Sensitivity study (paper Table 2)")

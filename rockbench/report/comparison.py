@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from rockbench.analytic import critical_angle, uplift_ratio
 from rockbench.evaluation import N_IMPACTS, RunResult
 from rockbench.method import REFERENCE, Method
 from rockbench.report.groups import group_title
@@ -142,7 +143,7 @@ def overview_table(ctx: Context, number: int) -> Table:
 
 def _case_columns(s: Scenario) -> list[Cell | str]:
     f, a = input_label(s)
-    ratio = "–" if s.excitation.is_free else f"{s.uplift_ratio:.2f}"
+    ratio = "–" if s.motion.is_free else f"{uplift_ratio(s):.2f}"
     return [Cell(s.name, kind="head"), f, a, ratio]
 
 
@@ -250,7 +251,7 @@ def free_tables(ctx: Context, scenarios: Sequence[Scenario]) -> list[Table]:
         columns=cols, groups=groups)
     for s in scenarios:
         ref = ctx.row(s.name, REFERENCE)
-        cells: list[Cell | str] = [Cell(s.name, kind="head"), f"{s.critical_angle:.4f}",
+        cells: list[Cell | str] = [Cell(s.name, kind="head"), f"{critical_angle(s.geometry):.4f}",
                                    f"{s.initial_tilt:g}"]
         cells.append(_value(a, ref, fmt_seconds(ref.metrics.time_to_rest) if ref else "–",
                             REFERENCE))
@@ -333,7 +334,7 @@ def _median(values: Sequence[float]) -> float:
 
 
 def _kind(scenarios: Sequence[Scenario]) -> str:
-    if any(s.is_assembly for s in scenarios):
+    if any(s.geometry.column is None for s in scenarios):
         return "assemblies"
     return "single blocks" if all(s.n_blocks == 1 for s in scenarios) else "stacks"
 

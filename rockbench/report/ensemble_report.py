@@ -1,7 +1,7 @@
 """The predictability section of the comparison report, and ``ensembles.csv``/``.json``.
 
 Drawn from :attr:`CompareResult.predictability` (t* per case,
-:mod:`rockbench.studies.predictability`) and :attr:`CompareResult.ensembles`
+:mod:`rockbench.campaign.predictability`) and :attr:`CompareResult.ensembles`
 (peak distributions beyond t*, :mod:`rockbench.studies.ensembles`); nothing is
 simulated or measured here.
 """
@@ -146,7 +146,7 @@ def distribution_figure(path: Path, scenario: str,
     return path
 
 
-def predictability_section(result: CompareResult, fig: Callable[..., FigureItem],
+def predictability_section(result: CompareResult, out: Path, fig: Callable[..., FigureItem],
                            number: Callable[[], int]) -> Section | None:
     """The report's section on t* and the distributions (None when t* was not measured)."""
     if not result.predictability:
@@ -163,7 +163,6 @@ def predictability_section(result: CompareResult, fig: Callable[..., FigureItem]
     sec.items.append(_t_star_table(result, number()))
     if result.ensembles:
         sec.items.append(_distribution_table(result.ensembles, number()))
-        out = Path(result.options.out)
         by_case: dict[str, list[PeakDistribution]] = {}
         for c in result.ensembles:
             by_case.setdefault(c.scenario, [c.reference]).append(c.engine)
@@ -190,11 +189,11 @@ def _dist_json(d: PeakDistribution) -> dict[str, Any]:
             "failed": d.failed, "p_overturn": d.p_overturn, "peaks": [list(p) for p in d.peaks]}
 
 
-def write_ensemble_files(result: CompareResult) -> list[Path]:
-    """``predictability.json`` and, with ensembles, ``ensembles.csv`` and ``ensembles.json``."""
+def write_ensemble_files(result: CompareResult, out: Path) -> list[Path]:
+    """``predictability.json`` and, with ensembles, ``ensembles.csv`` and ``ensembles.json``
+    in the report folder ``out``."""
     if not result.predictability:
         return []
-    out = Path(result.options.out)
     pred = {name: {"t_star": p.t_star, "duration": p.duration, "spread": p.spread,
                    "members": p.members, "fraction": p.fraction, "well_posed": p.well_posed,
                    "diverged_outcome": p.diverged_outcome,

@@ -25,6 +25,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import NullFormatter
 
+from rockbench.analytic import critical_angle, uplift_ratio
 from rockbench.evaluation import RunResult
 from rockbench.method import REFERENCE, Method
 from rockbench.scenarios import Scenario
@@ -101,7 +102,7 @@ def _shown_duration(scenario: Scenario, trajs: Mapping[str, Trajectory]) -> floa
     """The whole duration, or less in free rocking when every run is at rest early."""
     if not scenario.excitation.is_free:
         return scenario.duration
-    lam = scenario.critical_angle
+    lam = critical_angle(scenario.geometry)
     last = 0.0
     for traj in trajs.values():
         if not traj.t.size:
@@ -136,7 +137,7 @@ def time_history_figure(path: Path, scenario: Scenario, trajs: Mapping[str, Traj
     Path
         The PNG written.
     """
-    lam = scenario.critical_angle
+    lam = critical_angle(scenario.geometry)
     nb = scenario.n_blocks
     fig = Figure(figsize=(9.5, 1.2 + 2.4 * nb), layout="constrained")
     axes = fig.subplots(nb, 1, sharex=True, squeeze=False)[:, 0]
@@ -195,7 +196,7 @@ def time_history_figure(path: Path, scenario: Scenario, trajs: Mapping[str, Traj
     axes[-1].set_xlim(0.0, t_end)
     desc = f"λ = {lam:.4f} rad"
     if not scenario.excitation.is_free:
-        desc += f", ü_g/(g tan λ) = {scenario.uplift_ratio:.2f}"
+        desc += f", ü_g/(g tan λ) = {uplift_ratio(scenario):.2f}"
     else:
         desc += f", θ0 = {scenario.initial_tilt:g} λ"
     fig.suptitle(f"{scenario.name}  ({desc})", fontsize=11)
@@ -239,7 +240,7 @@ def peak_input_figure(path: Path, title: str, scenarios: Sequence[Scenario],
     paper_marks = {"analytical": "o", "Bullet": "s", "Vortex": "^", "DEM": "D"}
     handles: dict[str, Any] = {}
     names = {s.name for s in scenarios}
-    xs_all = [s.uplift_ratio for s in scenarios]
+    xs_all = [uplift_ratio(s) for s in scenarios]
     span = max(max(xs_all) - min(xs_all), 0.4)
     for col, block in enumerate(range(nb, 0, -1)):
         ax = axes[col]
@@ -257,10 +258,10 @@ def peak_input_figure(path: Path, title: str, scenarios: Sequence[Scenario],
                 if r is None or block > s.n_blocks:
                     continue
                 if r.status is Status.OK:
-                    xs.append(s.uplift_ratio)
+                    xs.append(uplift_ratio(s))
                     ys.append(r.metrics.peaks[block - 1])
                 else:
-                    fx.append(s.uplift_ratio)
+                    fx.append(uplift_ratio(s))
             # small horizontal offsets keep coincident markers visible
             dx = (k - (len(methods) - 1) / 2) * 0.008 * span
             h = ax.plot(np.add(xs, dx), ys, ls="none", marker=st.marker, color=st.color,
@@ -278,7 +279,7 @@ def peak_input_figure(path: Path, title: str, scenarios: Sequence[Scenario],
         for b, pm, v, s in published:
             if b != block or not isinstance(v, float):
                 continue
-            h = ax.plot(s.uplift_ratio, v, ls="none", marker=paper_marks.get(pm, "o"),
+            h = ax.plot(uplift_ratio(s), v, ls="none", marker=paper_marks.get(pm, "o"),
                         mfc="none", mec="0.45", ms=7, mew=1.0, label=f"paper: {pm}", zorder=1)[0]
             handles.setdefault(f"paper: {pm}", h)
         if failed_any:
@@ -315,9 +316,11 @@ class SpeedPoint:
     peak_error : float
         Median over scenarios and blocks of |Δpeak|/peak (NaN if none).
     failed : int
-        Runs that did not finish ok.
+        Runs that did not end as their reference (or ok, where there is none).
     total : int
-        Runs compared.
+        Runs of the method.
+    compared : int
+        Scenarios whose error stands behind the point (the medians' sample size).
     """
 
     method: str
@@ -326,6 +329,7 @@ class SpeedPoint:
     peak_error: float
     failed: int
     total: int
+    compared: int = 0
 
 
 def _front(xy: Sequence[tuple[float, float]]) -> list[int]:
@@ -367,7 +371,9 @@ def accuracy_speed_figure(path: Path, points: Sequence[SpeedPoint],
         for i, p in enumerate(points):
             st = styles.get(p.method) or MethodStyle("#555555", "-", 1, "o", 2)
             x, y = xy[i]
-            note = f" ({p.failed}/{p.total} not ok)" if p.failed else ""
+            note = f" ({p.failed}/{p.total} unlike the reference)" if p.failed else ""
+            if p.compared < p.total:
+                note += f" [{p.compared} of {p.total} scenarios]"
             if math.isfinite(x) and math.isfinite(y) and y > 0:
                 ax.plot(x, y, marker=st.marker, color=st.color, ms=9, ls="none", zorder=3,
                         mec="black" if i in front else st.color, mew=1.6 if i in front else 1)
@@ -424,7 +430,7 @@ def sensitivity_figure(path: Path, scenario: Scenario, knob_title: str,
     Path
         The PNG written.
     """
-    lam = scenario.critical_angle
+    lam = critical_angle(scenario.geometry)
     n = max(1, len(panels))
     fig = Figure(figsize=(9.5, 0.9 + 2.5 * n), layout="constrained")
     axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]

@@ -25,7 +25,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from scipy.stats import norm
 
-import rockbench
+from rockbench import provenance
+from rockbench.analytic import critical_angle
 from rockbench.fragility import FitStatus, FragilityFit
 from rockbench.method import REFERENCE
 from rockbench.report.document import (
@@ -288,7 +289,7 @@ def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = Tr
     header = [
         ("Date", _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M:%S %Z")),
         ("Scenario", f"{opts.scenario.name} ({opts.scenario.n_blocks} block(s), λ = "
-                     f"{opts.scenario.critical_angle:.4f} rad)"),
+                     f"{critical_angle(opts.scenario.geometry):.4f} rad)"),
         ("Record set", f"{opts.set_name or 'custom'} ({len(result.records)} records)"),
         ("Intensity", f"{result.measure.label} at {', '.join(f'{v:g}' for v in opts.levels)}"),
         ("Runs", f"{len(result.runs)}: {result.ran} run now, {result.reused} reused (--resume); "
@@ -299,7 +300,7 @@ def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = Tr
                       + "; over the runs' own wall time "
                       + (f"{100 * result.overhead_on_run_wall:.0f} %"
                          if math.isfinite(result.overhead_on_run_wall) else "–")),
-        ("rockbench", rockbench.__version__),
+        ("rockbench", provenance.describe()),
         ("Python", python_version()),
         ("Machine (CPU)", cpu_model()),
         ("Engine versions", ", ".join(f"{e} {v}" for e, v in result.versions.items())),

@@ -5,7 +5,6 @@ from __future__ import annotations
 from typing import Any
 
 from rockbench.studies.matrix import FAIL, PASS, REGRESSION, SKIP, Cell, MatrixResult
-from rockbench.studies.references import NO_MODEL
 from rockbench.trajectory import Status
 
 __all__ = ["format_grid", "grid_table"]
@@ -34,7 +33,7 @@ def _legend(result: MatrixResult) -> list[str]:
                 else "")]
     for name, note in result.reference_notes.items():
         lines.append(f"note: {name}: {note}; " + (
-            "only the status is checked" if note == NO_MODEL
+            "only the status is checked" if name in result.no_model
             else "its cells fail unless their tolerance checks the status only"))
     bad = [c for c in result.cells.values() if c.outcome in (FAIL, REGRESSION)]
     for c in sorted(bad, key=lambda c: (c.engine, c.scenario)):

@@ -14,6 +14,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from rockbench.analytic import uplift_ratio
 from rockbench.evaluation import N_IMPACTS, RunResult
 from rockbench.report.groups import scenario_group
 
@@ -50,7 +51,7 @@ def result_row(r: RunResult) -> dict[str, Any]:
         "engine": r.method.engine, "preset": r.method.preset, "variation": r.method.variation,
         "reference": int(r.method.is_reference), "status": m.status.value,
         "message": m.message, "n_blocks": m.n_blocks, "critical_angle": m.critical_angle,
-        "uplift_ratio": None if s.excitation.is_free else s.uplift_ratio,
+        "uplift_ratio": None if s.motion.is_free else uplift_ratio(s),
         "duration": m.duration, "simulated_time": m.simulated_time,
         "max_error": m.max_error, "max_error_early": m.max_error_early, "horizon": m.horizon,
         "time_to_rest": m.time_to_rest, "reference_time_to_rest": m.reference_time_to_rest,

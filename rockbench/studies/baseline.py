@@ -22,7 +22,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
-import rockbench
+from rockbench import provenance
 from rockbench.errors import RockbenchError
 from rockbench.evaluation import RunMetrics
 from rockbench.store import jsonable
@@ -64,7 +64,7 @@ def baseline_data(cells: Mapping[str, tuple[Status, Mapping[str, Any], RunMetric
     return {
         "format": FORMAT,
         "suite": suite,
-        "rockbench_version": rockbench.__version__,
+        "rockbench_version": provenance.code_version(),
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "cells": {k: {"status": s.value, "settings": jsonable(dict(st)),
                       "metrics": m.to_json()}

@@ -57,15 +57,17 @@ import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 
+from rockbench.analytic import critical_angle
+from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
+from rockbench.evaluation import RunResult
 from rockbench.method import Method
-from rockbench.runner import ExecutionOptions, Job, run_jobs
+from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario, SinePulse
-from rockbench.store import Store
-from rockbench.studies.recording import finish_run
 from rockbench.studies.tilting import reference
 from rockbench.trajectory import Status, Trajectory
 
@@ -94,7 +96,6 @@ GROWTH = 2.0
 KIND = "collapse"
 #: Output rate of the runs (Hz): the end state and overturning need no more.
 _OUTPUT_RATE = 200.0
-_NO_REFERENCE = "no analytic dynamic reference for a pulse to collapse"
 
 
 def static_factor(scenario: Scenario) -> float:
@@ -128,10 +129,10 @@ def outcome(traj: Trajectory, scenario: Scenario) -> Outcome | None:
     turn = np.abs(traj.theta[-1] - traj.theta[0])
     drop = traj.z[0] - traj.z[-1]
     heights = np.array([b.height for b in scenario.blocks])
-    if np.any(turn > RESIDUAL_ROTATION * scenario.critical_angle) or np.any(
+    if np.any(turn > RESIDUAL_ROTATION * critical_angle(scenario.geometry)) or np.any(
             drop > RESIDUAL_DROP * heights):
         return "collapse"
-    u = float(np.asarray(scenario.excitation.displacement(traj.t[-1])))
+    u = float(np.asarray(scenario.motion.x.displacement(traj.t[-1])))
     disp = np.hypot(traj.x[-1] - traj.x[0] - u, traj.z[-1] - traj.z[0])
     sizes = np.array([max(b.width, b.height) for b in scenario.blocks])
     return "sliding" if np.any(disp > RESIDUAL_DISPLACEMENT * sizes) else "rest"
@@ -310,8 +311,8 @@ def pulse_to_collapse(scenarios: Sequence[Scenario], engines: Sequence[str],
                       settings: Mapping[str, Mapping[str, Any]] | None = None,
                       rtol: float = 0.02, max_factor: float = 16.0, growth: float = GROWTH,
                       free_time: float = FREE_TIME,
-                      execution: ExecutionOptions | None = None, store: Store | None = None,
-                      on_result: Callable[[Job, Trajectory], None] | None = None
+                      execution: ExecutionOptions | None = None, db: Path | None = None,
+                      on_result: Callable[[RunResult, Trajectory | None], None] | None = None
                       ) -> CollapseStudy:
     """Bisect the collapse amplitude of every assembly × engine × frequency.
 
@@ -335,10 +336,10 @@ def pulse_to_collapse(scenarios: Sequence[Scenario], engines: Sequence[str],
         Still base after the pulse before the end state is judged (s).
     execution : ExecutionOptions, optional
         How the runs are executed (default: one isolated worker).
-    store : Store, optional
-        Where each run is recorded as it finishes (kind ``collapse``).
+    db : Path, optional
+        The results store, where each run is recorded as it finishes (kind ``collapse``).
     on_result : callable, optional
-        Called as ``on_result(job, trajectory)`` after each run (progress).
+        Called as ``on_result(result, trajectory)`` after each run (progress).
 
     Returns
     -------
@@ -357,6 +358,7 @@ def pulse_to_collapse(scenarios: Sequence[Scenario], engines: Sequence[str],
     if not frequencies or not all(math.isfinite(f) and f > 0 for f in frequencies):
         raise ValueError(f"pulse frequencies must be finite and > 0, got {list(frequencies)}")
     settings = {e: dict((settings or {}).get(e, {})) for e in engines}
+    ex = execution or ExecutionOptions()
     cells = []
     for sc in scenarios:
         alpha = static_factor(sc)
@@ -367,18 +369,14 @@ def pulse_to_collapse(scenarios: Sequence[Scenario], engines: Sequence[str],
         batch = [(c, f) for c in cells if (f := c.probe(rtol, max_factor)) is not None]
         if not batch:
             break
-        jobs = [Job(pulse_scenario(c.scenario, c.frequency, f, c.alpha, free_time), c.engine,
-                    settings[c.engine]) for c, f in batch]
-
-        def finished(job: Job, traj: Trajectory) -> None:
-            finish_run(store, job.scenario, Method.of(job.engine, job.settings), traj, None,
-                       kind=KIND, reference_note=_NO_REFERENCE)
-            if on_result is not None:
-                on_result(job, traj)
-
-        trajs = run_jobs(jobs, execution, on_result=finished)
-        for (c, f), job, traj in zip(batch, jobs, trajs, strict=True):
-            result = outcome(traj, job.scenario)
+        plan = [PlannedRun(pulse_scenario(c.scenario, c.frequency, f, c.alpha, free_time),
+                           Method.of(c.engine, settings[c.engine])) for c, f in batch]
+        campaign = run_campaign(plan, CampaignOptions(
+            kind=KIND, db=db, keep=True, references=False, execution=ex, timeout=ex.timeout),
+            on_result=on_result)
+        for (c, f), run in zip(batch, plan, strict=True):
+            traj = campaign.trajectories[run.key]
+            result = outcome(traj, run.scenario)
             verdict = None if result is None else result == "collapse"
             c.probes.append(CollapseProbe(
                 f, verdict, traj.status, float(traj.cpu_time),

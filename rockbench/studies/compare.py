@@ -1,63 +1,47 @@
 """The comparison study: scenarios × engines × presets, plus the analytic reference.
 
-Each run's trajectory is written under ``DIR/trajectories/<scenario>/<method>.npz``
-(+ ``.json`` sidecar, atomically) and its :class:`~rockbench.evaluation.RunMetrics`
-recorded in the results store as soon as it finishes, so an interrupted
-comparison loses nothing; ``--resume`` finds finished runs in the store (same
-scenario content, method, engine and rockbench versions) and reads their
-trajectories back, re-running those whose file is missing or torn.
+The study plans its runs and hands them to the campaign
+(:func:`rockbench.campaign.run_campaign`), which records each run in the
+results store and archives its trajectory beside it as soon as it finishes, so
+an interrupted comparison loses nothing; ``--resume`` takes every finished run
+whose identity (scenario content, engine and library version, resolved
+settings, code version) is in the store. Beyond each scenario's predictability
+horizon the ensembles compare distributions (``ensemble``).
 
 This is the Python API behind ``rockbench compare``::
 
     from rockbench.studies.compare import CompareOptions, run_comparison
-    result = run_comparison(CompareOptions(scenarios=[...], engines=["mujoco"], out=Path("r")))
+    result = run_comparison(CompareOptions(scenarios=[...], engines=["mujoco"]))
 
 Rendering the report from the result is :func:`rockbench.report.compare_report.write_report`.
 """
 
 from __future__ import annotations
 
-import contextlib
 import time
-import zipfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import rockbench
-from rockbench import analytic
+from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
+from rockbench.campaign.predictability import DEFAULT_MEMBERS, Perturbation, Predictability
 from rockbench.engines import engine_class
 from rockbench.errors import RockbenchError
 from rockbench.evaluation import RunResult
 from rockbench.method import REFERENCE, Method, slug
-from rockbench.runner import ExecutionOptions, Job, run_jobs
-from rockbench.scenarios import Scenario, scenario_to_dict
-from rockbench.store import Store
+from rockbench.runner import ExecutionOptions
+from rockbench.scenarios import Scenario
 from rockbench.studies import sensitivity as sens
 from rockbench.studies.ensembles import EnsembleComparison, compare_ensembles, run_ensembles
-from rockbench.studies.predictability import (
-    DEFAULT_MEMBERS,
-    Perturbation,
-    Predictability,
-    predictability,
-)
-from rockbench.studies.recording import measure, record_run, settings_hash
-from rockbench.studies.references import NO_MODEL, references
-from rockbench.trajectory import Status, Trajectory
+from rockbench.studies.verdict import Verdict
+from rockbench.studies.verify import verdict_of
+from rockbench.trajectory import Trajectory
 
-__all__ = ["CompareOptions", "CompareResult", "PlannedRun", "run_comparison", "default_timeout",
-           "KIND"]
+__all__ = ["CompareOptions", "CompareResult", "run_comparison", "KIND"]
 
 #: The store's ``kind`` of runs made by this study.
 KIND = "compare"
-#: Statuses that --resume runs again (possibly transient failures).
-_RERUN = {Status.CRASHED, Status.TIMEOUT}
-
-
-def default_timeout(scenario: Scenario) -> float:
-    """Generous per-run wall-time limit: 5 min plus 1 min per simulated second."""
-    return 300.0 + 60.0 * scenario.duration
 
 
 @dataclass
@@ -70,17 +54,15 @@ class CompareOptions:
         The cases (may be empty with ``sensitivity``).
     engines : list of str
         Engines to run (the analytic reference is always run as well).
-    out : Path
-        Report directory (the trajectories go to ``out/trajectories``).
     presets : list of str
         Each engine runs once per preset (label ``engine[preset]`` when several).
     overrides : dict
         Per engine, knob overrides applied on top of every preset (``--settings``, ``--set``).
     execution : ExecutionOptions
-        Workers, executor and isolation (one worker gives clean timings).
+        Workers, executor and isolation.
     timeout : float or None
-        Per-run wall-time limit in s; None: :func:`default_timeout` of each
-        scenario (``execution.timeout`` is not used).
+        Per-run wall-time limit in s; None: :func:`rockbench.campaign.default_timeout`
+        of each scenario (``execution.timeout`` is not used).
     resume : bool
         Reuse finished runs found in the store.
     db : Path or None
@@ -92,10 +74,6 @@ class CompareOptions:
         engine's ``sensitivity_preset`` (``accurate``, Blender's ``paper``).
     suite : str
         Suite name (stored with the runs, shown in the report header).
-    command : str
-        The command line shown in the report header.
-    embed_figures : bool
-        Embed PNGs in index.html as base64 (else link ``figures/``).
     horizon_members : int
         Perturbed reference runs per scenario that measure its predictability
         horizon t* (errors are measured up to t*); 0: none, the whole run is compared.
@@ -108,7 +86,6 @@ class CompareOptions:
 
     scenarios: list[Scenario]
     engines: list[str]
-    out: Path
     presets: list[str] = field(default_factory=lambda: ["accurate"])
     overrides: dict[str, dict[str, Any]] = field(default_factory=dict)
     execution: ExecutionOptions = field(default_factory=ExecutionOptions)
@@ -118,38 +95,9 @@ class CompareOptions:
     sensitivity: bool = False
     sensitivity_from: str | None = None
     suite: str = ""
-    command: str = ""
-    embed_figures: bool = True
     horizon_members: int = DEFAULT_MEMBERS
     ensemble: int = 0
     perturbation: Perturbation = field(default_factory=Perturbation)
-
-
-@dataclass(frozen=True)
-class PlannedRun:
-    """One run of the comparison before it ran.
-
-    Attributes
-    ----------
-    scenario : Scenario
-        What to simulate.
-    method : Method
-        Engine and settings.
-    """
-
-    scenario: Scenario
-    method: Method
-
-    @property
-    def job(self) -> Job:
-        """What the runner executes."""
-        return Job(self.scenario, self.method.engine, self.method.settings,
-                   label=self.method.label)
-
-    @property
-    def trajectory(self) -> str:
-        """Its trajectory file, relative to the report directory."""
-        return f"trajectories/{slug(self.scenario.name)}/{self.method.slug}.npz"
 
 
 @dataclass
@@ -165,7 +113,7 @@ class CompareResult:
     results : list of RunResult
         One per planned run, in report order.
     trajectories : dict
-        (scenario name, method label) → trajectory.
+        (scenario name, method label) → trajectory (every run's).
     methods : list of Method
         The main comparison's methods, in column order (the reference first).
     variations, skipped
@@ -182,6 +130,9 @@ class CompareResult:
         Scenario name → its horizon t* (scenarios with an analytic model).
     ensembles : list of EnsembleComparison
         Each engine's peak distributions against the reference's (``ensemble`` > 0).
+    verdict : Verdict or None
+        Each method judged against the closed forms (the main comparison's runs;
+        scenarios without one are unverified: ``rockbench verify`` builds a consensus).
     """
 
     options: CompareOptions
@@ -198,6 +149,7 @@ class CompareResult:
     wall_time: float
     predictability: dict[str, Predictability] = field(default_factory=dict)
     ensembles: list[EnsembleComparison] = field(default_factory=list)
+    verdict: Verdict | None = None
 
 
 def _plan(opts: CompareOptions) -> tuple[list[PlannedRun], list[Method], Scenario | None,
@@ -234,14 +186,6 @@ def _check_names(runs: Sequence[PlannedRun]) -> None:
                                  f"the result files of {key!r}: give them distinct names")
 
 
-def load_trajectory(path: Path) -> Trajectory | None:
-    """A stored trajectory, or None if it is missing, empty or torn (it is then rerun)."""
-    try:
-        return Trajectory.load(path)
-    except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile):
-        return None
-
-
 def run_comparison(opts: CompareOptions,
                    progress: Callable[[int, str], Any] | None = None) -> CompareResult:
     """Run every planned job (reusing stored ones with ``resume``) and return the results.
@@ -264,128 +208,23 @@ def run_comparison(opts: CompareOptions,
         unknown engine or bad settings.
     """
     start = time.perf_counter()
-    if opts.resume and opts.db is None:
-        raise RockbenchError("--resume reads finished runs from the results store: "
-                             "drop --no-db (or give --db FILE)")
-    out = Path(opts.out)
     runs, methods, b0, variations, skipped = _plan(opts)
-    versions = {e: engine_class(e).version()
-                for e in dict.fromkeys([REFERENCE, *(r.method.engine for r in runs)])}
-    store = Store(opts.db) if opts.db is not None else None
-    with store if store is not None else contextlib.nullcontext():
-        trajs: dict[tuple[str, str], Trajectory] = {}
-        results: dict[tuple[str, str], RunResult] = {}
-        todo: list[PlannedRun] = []
-        for run in runs:
-            traj = _stored(store, run, out, versions) if opts.resume else None
-            if traj is None:
-                todo.append(run)
-            else:
-                trajs[(run.scenario.name, run.method.label)] = traj
-        reused = len(runs) - len(todo)
-
-        horizons: dict[str, Predictability] = {}
-
-        def finished(run: PlannedRun, traj: Trajectory, *, record: bool) -> None:
-            ref = trajs.get((run.scenario.name, REFERENCE))
-            pred = horizons.get(run.scenario.name)
-            m = measure(run.scenario, run.method, traj, ref,
-                        engine_version=versions[run.method.engine],
-                        horizon=pred.t_star if pred is not None else None)
-            res = RunResult(run.scenario, run.method, m, run.trajectory)
-            results[res.key] = res
-            if record:
-                record_run(store, run.scenario, run.method, traj, m, kind=KIND,
-                           suite=opts.suite, trajectory=str((out / run.trajectory).resolve()))
-
-        ref_runs = [r for r in todo if r.method.is_reference]
-        engine_runs = [r for r in todo if not r.method.is_reference]
-        refs, _ = references([r.scenario for r in ref_runs], store, execution=opts.execution)
-        for run in ref_runs:
-            traj = refs[run.scenario.name] or Trajectory.failed(
-                Status.UNSUPPORTED, NO_MODEL, n_blocks=run.scenario.n_blocks,
-                engine=REFERENCE, scenario=run.scenario.name)
-            _save(out, run, traj)
-            trajs[(run.scenario.name, REFERENCE)] = traj
-        if opts.horizon_members:
-            cases = list({r.scenario.name: r.scenario for r in runs}.values())
-            horizons.update(predictability(
-                cases, members=opts.horizon_members, perturbation=opts.perturbation,
-                store=store, execution=opts.execution,
-                nominal={s.name: trajs.get((s.name, REFERENCE)) for s in cases}))
-        for run in ref_runs:
-            finished(run, trajs[(run.scenario.name, REFERENCE)], record=True)
-        jobs = [r.job for r in engine_runs]
-        by_job = {id(job): run for job, run in zip(jobs, engine_runs, strict=True)}
-        cm = progress(len(jobs), "compare") if progress else contextlib.nullcontext(None)
-        with cm as bar:
-            def on_result(job: Job, traj: Trajectory) -> None:
-                run = by_job[id(job)]
-                _save(out, run, traj)
-                trajs[(run.scenario.name, run.method.label)] = traj
-                finished(run, traj, record=True)
-                if bar is not None:
-                    bar.advance(f"{run.scenario.name} {run.method.label} {traj.status}")
-
-            if jobs:
-                run_jobs(jobs, opts.execution, on_result=on_result, timeout_of=_limit(opts))
-        for run in runs:  # reused runs, evaluated against the (possibly reused) reference
-            key = (run.scenario.name, run.method.label)
-            if key not in results and key in trajs:
-                finished(run, trajs[key], record=False)
-        ensembles: list[EnsembleComparison] = []
-        if opts.ensemble:
-            n_jobs = opts.ensemble * (len(methods) - 1) * sum(
-                analytic.has_reference(s) for s in opts.scenarios)
-            cm = progress(n_jobs, "ensembles") if progress else contextlib.nullcontext(None)
-            with cm as bar:
-                def on_member(job: Job, traj: Trajectory) -> None:
-                    if bar is not None:
-                        bar.advance(f"{job.scenario.name} {job.label} {traj.status}")
-
-                dists = run_ensembles(opts.scenarios, methods, opts.ensemble,
-                                      opts.perturbation, store=store,
-                                      execution=opts.execution, timeout_of=_limit(opts),
-                                      on_result=on_member)
-            ensembles = compare_ensembles(dists)
-    ordered = [results[(r.scenario.name, r.method.label)] for r in runs
-               if (r.scenario.name, r.method.label) in results]
-    return CompareResult(options=opts, runs=runs, results=ordered, trajectories=trajs,
-                         methods=methods, variations=variations, skipped=skipped, b0=b0,
-                         versions=versions, ran=len(todo), reused=reused,
-                         wall_time=time.perf_counter() - start, predictability=horizons,
-                         ensembles=ensembles)
-
-
-def _limit(opts: CompareOptions) -> Callable[[Job], float]:
-    """Each run's time limit: ``opts.timeout``, else :func:`default_timeout` of its scenario."""
-    def limit(job: Job) -> float:
-        return opts.timeout if opts.timeout else default_timeout(job.scenario)
-    return limit
-
-
-def _save(out: Path, run: PlannedRun, traj: Trajectory) -> None:
-    traj.scenario = traj.scenario or run.scenario.name
-    # the file of a method is reused by later runs with other overrides: the hash
-    # tells --resume whose trajectory it holds
-    traj.extra = {**traj.extra, "method": run.method.label, "variation": run.method.variation,
-                  "settings_hash": settings_hash(run.method)}
-    traj.save(out / run.trajectory, scenario=scenario_to_dict(run.scenario))
-
-
-def _stored(store: Store | None, run: PlannedRun, out: Path,
-            versions: dict[str, str]) -> Trajectory | None:
-    """The finished trajectory of ``run`` from the store, or None (then it is run)."""
-    if store is None:
-        return None
-    rec = store.find(run.scenario, run.method, engine_version=versions[run.method.engine],
-                     rockbench_version=rockbench.__version__)
-    if rec is None or rec.status in _RERUN:
-        return None
-    path = Path(rec.trajectory) if rec.trajectory else out / run.trajectory
-    traj = load_trajectory(path)
-    if traj is None or traj.extra.get("settings_hash") != settings_hash(run.method):
-        return None
-    if path.resolve() != (out / run.trajectory).resolve():  # resumed into another folder
-        _save(out, run, traj)
-    return traj
+    campaign = run_campaign(runs, CampaignOptions(
+        kind=KIND, suite=opts.suite, db=opts.db, resume=opts.resume, archive=True, keep=True,
+        execution=opts.execution, timeout=opts.timeout, horizon_members=opts.horizon_members,
+        perturbation=opts.perturbation), progress=progress)
+    ensembles: list[EnsembleComparison] = []
+    if opts.ensemble:
+        ensembles = compare_ensembles(run_ensembles(
+            opts.scenarios, methods, opts.ensemble, opts.perturbation, db=opts.db,
+            execution=opts.execution, timeout=opts.timeout, progress=progress))
+    main = [r for r in campaign.results if not r.method.variation]
+    verdict = verdict_of(main, campaign.references)[0] if opts.scenarios else None
+    return CompareResult(options=opts, runs=runs, results=campaign.results,
+                         trajectories=campaign.trajectories, methods=methods,
+                         variations=variations, skipped=skipped, b0=b0,
+                         versions=campaign.versions,
+                         ran=campaign.ran, reused=campaign.reused,
+                         wall_time=time.perf_counter() - start,
+                         predictability=campaign.horizons, ensembles=ensembles,
+                         verdict=verdict)

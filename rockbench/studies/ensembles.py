@@ -1,13 +1,13 @@
 """Beyond the predictability horizon: distributions of an ensemble, per method.
 
-Past t* (:mod:`rockbench.studies.predictability`) the reference's own peaks and
+Past t* (:mod:`rockbench.campaign.predictability`) the reference's own peaks and
 outcome depend on perturbations of one part in 10⁶; what an engine can get
 right there is their distribution. Each method (the analytic reference and
 every engine) runs the same ``n`` perturbed members of a scenario
-(:func:`rockbench.studies.predictability.ensemble_scenarios`), through
-:func:`rockbench.runner.run_jobs` (isolated, parallel or on Dask; reference
-members through :func:`rockbench.studies.references.references`, cached in the
-store). Per method and block:
+(:func:`rockbench.campaign.predictability.ensemble_scenarios`), through the
+campaign (:func:`rockbench.campaign.run_campaign`: isolated, parallel or on
+Dask, every member recorded in the store; reference members cached there).
+Per method and block:
 
 * the distribution of the peak max |θ_i|/λ over the whole run, over the members
   that completed without overturning (each member's peaks from
@@ -33,23 +33,26 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 from scipy.stats import wasserstein_distance
 
 from rockbench import analytic
-from rockbench.evaluation import evaluate_run
+from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
+from rockbench.campaign.predictability import Perturbation, ensemble_scenarios
+from rockbench.evaluation import RunMetrics
 from rockbench.method import Method
-from rockbench.runner import ExecutionOptions, Job, run_jobs
+from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario
-from rockbench.store import Store
-from rockbench.studies.predictability import Perturbation, ensemble_scenarios
-from rockbench.studies.references import references
-from rockbench.trajectory import Status, Trajectory
+from rockbench.trajectory import Status
 
-__all__ = ["Distance", "PeakDistribution", "EnsembleComparison", "bootstrap_distance",
+__all__ = ["KIND", "Distance", "PeakDistribution", "EnsembleComparison", "bootstrap_distance",
            "peak_distribution", "run_ensembles", "compare_ensembles", "N_BOOTSTRAP", "LEVEL"]
 
+#: The store's ``kind`` of the ensembles' runs.
+KIND = "ensemble"
 #: Bootstrap resamples of a distance.
 N_BOOTSTRAP = 1000
 #: Confidence level of the bootstrap interval.
@@ -176,12 +179,11 @@ def bootstrap_distance(a: Sequence[float], b: Sequence[float], *, n_boot: int = 
 
 
 def peak_distribution(scenario: Scenario, method: str,
-                      members: Sequence[tuple[Scenario, Trajectory]]) -> PeakDistribution:
+                      members: Sequence[tuple[Scenario, RunMetrics]]) -> PeakDistribution:
     """The distribution of one method's members (each measured by ``evaluate_run``)."""
     peaks: list[list[float]] = [[] for _ in range(scenario.n_blocks)]
     over = failed = 0
-    for sc, traj in members:
-        m = evaluate_run(sc, traj, None)
+    for _, m in members:
         if m.status is Status.OVERTURNED:
             over += 1
         elif m.status is not Status.OK:
@@ -200,10 +202,10 @@ def run_ensembles(
     n: int,
     perturbation: Perturbation | None = None,
     *,
-    store: Store | None = None,
+    db: Path | None = None,
     execution: ExecutionOptions | None = None,
-    timeout_of: Callable[[Job], float | None] | None = None,
-    on_result: Callable[[Job, Trajectory], None] | None = None,
+    timeout: float | None = None,
+    progress: Callable[[int, str], Any] | None = None,
 ) -> dict[tuple[str, str], PeakDistribution]:
     """Run ``n`` perturbed members of each scenario with an analytic model on each method.
 
@@ -217,9 +219,10 @@ def run_ensembles(
         Members per scenario and method (>= 2).
     perturbation : Perturbation, optional
         Default :class:`Perturbation` ``()``.
-    store, execution, timeout_of, on_result
-        The reference cache, how jobs run, per-job time limits, a callback per
-        finished engine member.
+    db, execution, timeout, progress
+        The results store (every member is recorded), how the runs are
+        executed, the per-run time limit (None: the campaign's default) and a
+        progress factory (see :func:`rockbench.campaign.run_campaign`).
 
     Returns
     -------
@@ -231,26 +234,18 @@ def run_ensembles(
     pert = perturbation or Perturbation()
     cases = [s for s in scenarios if analytic.has_reference(s)]
     members = {s.name: ensemble_scenarios(s, n, pert) for s in cases}
-    refs, _ = references([m for s in cases for m in members[s.name]], store,
-                         execution=execution)
-    out = {}
-    for s in cases:
-        out[(s.name, Method.reference().label)] = peak_distribution(
-            s, Method.reference().label,
-            [(m, refs[m.name] or Trajectory.failed(Status.UNSUPPORTED, "no model",
-                                                   n_blocks=s.n_blocks)) for m in members[s.name]])
-    engines = [m for m in methods if not m.is_reference]
-    jobs = [Job(m, e.engine, e.settings, label=e.label) for s in cases for e in engines
-            for m in members[s.name]]
-    trajs = run_jobs(jobs, execution, on_result=on_result, timeout_of=timeout_of)
-    got: dict[tuple[str, str], list[tuple[Scenario, Trajectory]]] = {}
-    for job, traj in zip(jobs, trajs, strict=True):
-        base = job.scenario.name.rsplit("~p", 1)[0]
-        got.setdefault((base, job.label), []).append((job.scenario, traj))
+    every = [Method.reference()] + [m for m in methods if not m.is_reference]
+    plan = [PlannedRun(m, meth) for s in cases for meth in every for m in members[s.name]]
+    campaign = run_campaign(plan, CampaignOptions(
+        kind=KIND, db=db, execution=execution or ExecutionOptions(), timeout=timeout),
+        progress=progress)
+    got: dict[tuple[str, str], list[tuple[Scenario, RunMetrics]]] = {}
+    for res in campaign.results:
+        base = res.scenario.name.rsplit("~p", 1)[0]
+        got.setdefault((base, res.method.label), []).append((res.scenario, res.metrics))
     by_name = {s.name: s for s in cases}
-    for (name, label), runs in got.items():
-        out[(name, label)] = peak_distribution(by_name[name], label, runs)
-    return out
+    return {(name, label): peak_distribution(by_name[name], label, runs)
+            for (name, label), runs in got.items()}
 
 
 def compare_ensembles(dists: Mapping[tuple[str, str], PeakDistribution], *,

@@ -1,7 +1,7 @@
 """Overturning fragility: incremental dynamic analysis of one scenario over a record set.
 
 Every record of a set is scaled to every intensity level of one measure
-(:mod:`rockbench.fragility.intensity`: PGA, PGV, PGA/(g tan λ) or
+(:mod:`rockbench.scenarios.intensity`: PGA, PGV, PGA/(g tan λ) or
 PGV p/(g tan λ)) and run on every method (each engine at each preset, and the
 analytic reference) through the one dispatcher (:func:`rockbench.runner.run_jobs`:
 isolated, parallel, Dask-capable). Each run lasts the record plus a settling
@@ -34,7 +34,6 @@ Rendering the report is :func:`rockbench.report.fragility_report.write_report`.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import math
 import time
@@ -46,8 +45,7 @@ from typing import Any
 
 import numpy as np
 
-import rockbench
-from rockbench.engines import engine_class
+from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
 from rockbench.errors import RockbenchError
 from rockbench.evaluation import RunMetrics
 from rockbench.fragility import (
@@ -61,15 +59,12 @@ from rockbench.fragility import (
     find_non_monotone,
     scale_factor,
 )
+from rockbench.geometry import RockingProperties
 from rockbench.method import REFERENCE, Method
-from rockbench.runner import ExecutionOptions, Job, run_jobs
+from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario
-from rockbench.scenarios.assembly import Assembly
 from rockbench.scenarios.excitation import Record
-from rockbench.scenarios.model import RockingProperties
-from rockbench.store import Store
-from rockbench.studies.recording import measure, record_run
-from rockbench.trajectory import Status, Trajectory
+from rockbench.trajectory import Status
 
 __all__ = ["KIND", "LimitState", "StudyRecord", "FragilityOptions", "FragilityRun",
            "LimitStateCurve", "MethodCost", "RecordIsland", "FragilityResult", "set_records",
@@ -80,10 +75,6 @@ KIND = "fragility"
 #: Settling tail after the record's last sample (s): a block still rocking when the
 #: ground stops can still overturn, and the runs are cut only once it has had time to.
 DEFAULT_SETTLE = 5.0
-#: Statuses that --resume runs again (possibly transient failures).
-_RERUN = {Status.CRASHED, Status.TIMEOUT}
-#: The note kept in each run's metrics: outcomes, not errors, are compared here.
-_NOTE = "fragility study: methods compared by limit-state outcomes, not trajectories"
 
 
 class LimitState(Enum):
@@ -189,14 +180,14 @@ def _check_levels(levels: Sequence[float]) -> None:
 
 def study_rocking(scenario: Scenario) -> RockingProperties:
     """The rocking constants the normalised measures use: the block's, or for a stack
-    those of the whole stack rocking as one body (:meth:`Stack.monolithic`)."""
-    stack = scenario.stack
-    if isinstance(stack, Assembly):
+    those of the whole stack rocking as one body (:meth:`Column.monolithic`)."""
+    col = scenario.geometry.column
+    if col is None:
         raise RockbenchError("the fragility study takes a single block or a stack, "
                              "not an assembly")
-    if len(stack.blocks) == 1:
-        return stack.blocks[0].rocking(scenario.g)
-    return stack.monolithic(scenario.g)
+    if len(col) == 1:
+        return col.blocks[0].rocking(scenario.g)
+    return col.monolithic(scenario.g)
 
 
 @dataclass
@@ -456,10 +447,6 @@ class _Planned:
     method: Method
     scenario: Scenario
 
-    @property
-    def job(self) -> Job:
-        return Job(self.scenario, self.method.engine, self.method.settings,
-                   label=self.method.label)
 
 
 def _methods(opts: FragilityOptions) -> tuple[Method, ...]:
@@ -498,15 +485,6 @@ def _plan(opts: FragilityOptions, m: IntensityMeasure) -> tuple[tuple[Method, ..
     return methods, planned
 
 
-def _batch(opts: FragilityOptions) -> int:
-    """Jobs per :func:`run_jobs` call: each call keeps its trajectories until it returns, so a
-    local study of thousands of runs goes in batches (every run is a fresh process anyway);
-    a Dask cluster takes the whole study at once (a local one starts once per call)."""
-    if opts.execution.executor == "dask":
-        return 1 << 62
-    return max(64, 16 * opts.execution.jobs)
-
-
 def run_fragility(opts: FragilityOptions,
                   progress: Callable[[int, str], Any] | None = None) -> FragilityResult:
     """Run (or resume) the incremental dynamic analysis and fit the fragilities.
@@ -528,72 +506,29 @@ def run_fragility(opts: FragilityOptions,
     start = time.perf_counter()
     m = IntensityMeasure.parse(opts.measure)
     _check_levels(opts.levels)
-    if opts.resume and opts.db is None:
-        raise RockbenchError("--resume reads finished runs from the results store: "
-                             "drop --no-db (or give --db FILE)")
     methods, planned = _plan(opts, m)
-    for meth in methods:  # unknown preset or knob: refused before anything runs
-        s = meth.settings
-        engine_class(meth.engine).settings(s.pop("preset", None), **s)
-    versions = {e: engine_class(e).version() for e in dict.fromkeys(p.engine for p in methods)}
-    store = Store(opts.db) if opts.db is not None else None
-    done: dict[int, FragilityRun] = {}
-    with store if store is not None else contextlib.nullcontext():
-        todo: list[int] = []
-        for i, p in enumerate(planned):
-            old = _stored(store, p, versions) if opts.resume else None
-            if old is None:
-                todo.append(i)
-            else:
-                done[i] = _run(p, old, opts.theta_limit, reused=True)
-        by_job: dict[int, int] = {}
-        cm = progress(len(todo), "fragility") if progress else contextlib.nullcontext(None)
-        with cm as bar:
-            def on_result(job: Job, traj: Trajectory) -> None:
-                i = by_job[id(job)]
-                p = planned[i]
-                met = measure(p.scenario, p.method, traj, None,
-                              engine_version=versions[p.method.engine], reference_note=_NOTE)
-                record_run(store, p.scenario, p.method, traj, met, kind=KIND,
-                           suite=f"{opts.set_name or 'records'} {p.record.name}: "
-                                 f"{p.record.provenance}")
-                done[i] = _run(p, met, opts.theta_limit, reused=False)
-                if bar is not None:
-                    bar.advance(f"{p.record.name} {p.level:g} {p.method.label} {traj.status}")
-
-            size = _batch(opts)
-            for b in range(0, len(todo), size):
-                jobs = [planned[i].job for i in todo[b:b + size]]
-                by_job.clear()
-                by_job.update({id(job): i for job, i in zip(jobs, todo[b:b + size],
-                                                             strict=True)})
-                run_jobs(jobs, opts.execution, on_result=on_result)
-    runs = tuple(done[i] for i in range(len(planned)))
+    campaign = run_campaign(
+        [PlannedRun(p.scenario, p.method,
+                    suite=f"{opts.set_name or 'records'} {p.record.name}: {p.record.provenance}")
+         for p in planned],
+        CampaignOptions(kind=KIND, suite=opts.set_name or "records", db=opts.db,
+                        resume=opts.resume, execution=opts.execution), progress=progress)
+    runs = tuple(_run(p, r.metrics, opts.theta_limit, reused=r.reused)
+                 for p, r in zip(planned, campaign.results, strict=True))
     wall = time.perf_counter() - start
     curves = tuple(_curve(opts, runs, meth.label, state) for meth in methods
                    for state in LimitState)
     return FragilityResult(options=opts, measure=m, methods=methods,
                            records=tuple(opts.records), runs=runs, curves=curves,
                            costs=tuple(_cost(runs, meth.label) for meth in methods),
-                           versions=versions, ran=len(todo), reused=len(planned) - len(todo),
-                           wall_time=wall)
+                           versions=campaign.versions, ran=campaign.ran,
+                           reused=len(planned) - campaign.ran, wall_time=wall)
 
 
 def _run(p: _Planned, m: RunMetrics, theta_limit: float, *, reused: bool) -> FragilityRun:
     return FragilityRun(p.record.name, p.level, p.scale, p.method.label, m,
                         LimitState.OVERTURNING.exceeded(m, theta_limit),
                         LimitState.ROCKING.exceeded(m, theta_limit), reused)
-
-
-def _stored(store: Store | None, p: _Planned, versions: dict[str, str]) -> RunMetrics | None:
-    """The metrics of a finished run of ``p`` in the store, or None (then it is run)."""
-    if store is None:
-        return None
-    rec = store.find(p.scenario, p.method, engine_version=versions[p.method.engine],
-                     rockbench_version=rockbench.__version__)
-    if rec is None or rec.status in _RERUN or rec.metrics is None:
-        return None
-    return rec.metrics
 
 
 def _table(opts: FragilityOptions, runs: Sequence[FragilityRun], method: str,

@@ -1,9 +1,8 @@
 """The regression matrix: engines × scenarios, each cell checked against tolerances.
 
-:func:`run_matrix` takes the analytic reference of each scenario
-(:func:`rockbench.studies.references.references`), runs every engine on every
-scenario through the one dispatcher, records each run as it finishes
-(:mod:`rockbench.studies.recording`) and judges each cell:
+:func:`run_matrix` plans every engine on every scenario and runs them through the
+campaign (:func:`rockbench.campaign.run_campaign`: references, isolated runs,
+metrics, every run recorded as it finishes), then judges each cell:
 
 * **pass / fail** against the tolerance file (:mod:`rockbench.studies.tolerances`);
   a cell whose analytic reference did not complete fails (it cannot be
@@ -13,7 +12,7 @@ scenario through the one dispatcher, records each run as it finishes
 * **skip** when the engine cannot model the scenario (status ``unsupported``).
 
 Time-history errors are measured up to each scenario's predictability horizon
-t* (:mod:`rockbench.studies.predictability`), as in the comparison report: a
+t* (:mod:`rockbench.campaign.predictability`), as in the comparison report: a
 cell's ``max_error`` is its largest deviation up to t*, and a divergence
 after t* (where the reference itself is not predictable) fails no cell. t* is
 measured only for the scenarios where a cell checks a metric that stops at it
@@ -33,22 +32,19 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
-import rockbench
-from rockbench.engines import engine_class
+from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
+from rockbench.campaign.predictability import DEFAULT_MEMBERS, Predictability
 from rockbench.errors import RockbenchError
 from rockbench.evaluation import RunMetrics
 from rockbench.method import REFERENCE, Method
-from rockbench.runner import ExecutionOptions, Job, run_jobs
+from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario
-from rockbench.store import Store
 from rockbench.studies.baseline import Baseline, BaselineCell
-from rockbench.studies.predictability import DEFAULT_MEMBERS, Predictability, predictability
-from rockbench.studies.recording import finish_run
-from rockbench.studies.references import references
 from rockbench.studies.tolerances import DEFAULT_REGRESSION, Tolerances
-from rockbench.trajectory import Status, Trajectory
+from rockbench.trajectory import Status
 
 __all__ = ["Cell", "MatrixResult", "run_matrix", "evaluate", "regressions", "fmt_number",
            "KIND", "PASS", "FAIL", "REGRESSION", "SKIP"]
@@ -211,6 +207,8 @@ class MatrixResult:
         ``(scenario, engine)`` → :class:`Cell`.
     reference_notes : dict
         Scenario → why it has no usable reference.
+    no_model : frozenset of str
+        The scenarios no analytic model covers (their cells check the status only).
     tolerances : str
         Source of the tolerances.
     baseline : str
@@ -224,6 +222,7 @@ class MatrixResult:
     engines: list[str]
     cells: dict[tuple[str, str], Cell]
     reference_notes: dict[str, str] = field(default_factory=dict)
+    no_model: frozenset[str] = frozenset()
     tolerances: str = ""
     baseline: str = ""
     wall_time: float = 0.0
@@ -252,7 +251,7 @@ def run_matrix(
     *,
     settings: Mapping[str, Mapping[str, Any]] | None = None,
     suite: str = "",
-    store: Store | None = None,
+    db: Path | None = None,
     baseline: Baseline | None = None,
     resume: bool = False,
     execution: ExecutionOptions | None = None,
@@ -273,13 +272,12 @@ def run_matrix(
         Engine → requested settings.
     suite : str
         Suite name (selects the tolerance file's suite layer, labels outputs).
-    store : Store, optional
-        Results store: every run is appended as it finishes, references are cached.
+    db : Path, optional
+        The results store: every run is appended as it finishes, references are cached.
     baseline : Baseline, optional
         From :func:`rockbench.studies.baseline.load_baseline`.
     resume : bool
-        Reuse stored runs of the same cell (scenario content, engine and its
-        version, settings, rockbench version) instead of running them again.
+        Reuse stored runs of the same identity instead of running them again.
     execution : ExecutionOptions, optional
         Workers, time limit, executor.
     on_cell : callable, optional
@@ -297,46 +295,29 @@ def run_matrix(
     dup = next((n for n in names if names.count(n) > 1), None)
     if dup is not None:
         raise RockbenchError(f"scenario name {dup!r} appears twice in the matrix")
-    refs, notes = references(scenarios, store, execution=execution)
     checked = set(HORIZON_METRICS & set(tolerances.regression.get("metrics", ()))
                   if baseline is not None else ())
-    timed = [sc for sc in scenarios
+    # t* only where a cell checks a metric that stops at it: a status-only matrix costs no
+    # ensemble
+    timed = {sc.name for sc in scenarios
              if checked or any(tolerances.for_cell(e, sc.name, suite).get(m) is not None
-                               for e in engines for m in HORIZON_METRICS)]
-    horizons = (predictability(timed, members=horizon_members, store=store,
-                               execution=execution, nominal=refs)
-                if horizon_members and timed else {})
-    versions = {e: engine_class(e).version() for e in engines}
+                               for e in engines for m in HORIZON_METRICS)}
     methods = {e: Method.of(e, settings.get(e, {})) for e in engines}
-    by_name = {sc.name: sc for sc in scenarios}
+    plan = [PlannedRun(sc, methods[e]) for sc in scenarios for e in engines]
     cells: dict[tuple[str, str], Cell] = {}
 
-    def add(cell: Cell) -> None:
+    def add(res: Any, _: Any) -> None:
+        cell = Cell(res.scenario.name, res.method, res.metrics, reused=res.reused)
         cells[(cell.scenario, cell.engine)] = cell
         if on_cell is not None:
             on_cell(cell)
 
-    jobs = []
-    for sc in scenarios:
-        for e in engines:
-            old = (store.find(sc, methods[e], engine_version=versions[e],
-                              rockbench_version=rockbench.__version__)
-                   if resume and store is not None else None)
-            if old is not None and old.metrics is not None:
-                add(Cell(sc.name, methods[e], old.metrics, reused=True))
-            else:
-                jobs.append(Job(sc, e, methods[e].settings))
-
-    def finished(job: Job, traj: Trajectory) -> None:
-        sc = by_name[job.scenario.name]
-        method = methods[job.engine]
-        m = finish_run(store, sc, method, traj, refs.get(sc.name), kind=KIND, suite=suite,
-                       engine_version=versions[job.engine],
-                       reference_note=notes.get(sc.name, ""),
-                       horizon=horizons[sc.name].t_star if sc.name in horizons else None)
-        add(Cell(sc.name, method, m))
-
-    run_jobs(jobs, execution, on_result=finished)
+    campaign = run_campaign(plan, CampaignOptions(
+        kind=KIND, suite=suite, db=db, resume=resume,
+        execution=execution or ExecutionOptions(),
+        timeout=(execution or ExecutionOptions()).timeout,
+        horizon_members=horizon_members if timed else 0, horizon_for=timed), on_result=add)
+    horizons = campaign.horizons
     base_cells = baseline.cells if baseline is not None else {}
     for (name, e), cell in cells.items():
         if cell.status is Status.UNSUPPORTED:
@@ -348,7 +329,11 @@ def run_matrix(
                 if cell.key in base_cells else [])
         cell.reasons = fails + [f"regression: {r}" for r in regs]
         cell.outcome = FAIL if fails else REGRESSION if regs else PASS
-    return MatrixResult(suite=suite, scenarios=names, engines=list(engines), cells=cells,
-                        reference_notes=notes, tolerances=tolerances.source,
+    ordered = {(sc.name, e): cells[(sc.name, e)] for sc in scenarios for e in engines}
+    return MatrixResult(suite=suite, scenarios=names, engines=list(engines), cells=ordered,
+                        reference_notes=campaign.reference_notes,
+                        no_model=frozenset(n for n, r in campaign.references.items()
+                                           if r is None),
+                        tolerances=tolerances.source,
                         baseline=baseline.source if baseline is not None else "",
                         wall_time=time.perf_counter() - start)

@@ -2,8 +2,8 @@
 
 The paper varied Bullet's solver iterations, collision shape, collision margin,
 sub-steps and frame rate one at a time. Each engine here gets the same
-variations on its closest knobs, found by reading its ``Settings`` fields;
-where an engine has no such knob the variation is skipped with the reason.
+variations on the knobs it declares for those roles (``Engine.knob_roles``);
+where an engine has none the variation is skipped with the reason.
 Engines that only expose a time step get the paper's time step
 Δt = 1 / ((n_s + 1) · FPS), with FPS = 60 for the sub-step study and n_s = 20
 for the rate study (the paper's frame-rate/sub-step relation; the two fixed
@@ -18,7 +18,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from rockbench.engines import Engine, engine_class
+from rockbench.engines import Engine, KnobRole, engine_class
 from rockbench.method import REFERENCE, Method
 from rockbench.scenarios import Scenario, get_scenario
 
@@ -48,30 +48,25 @@ def sensitivity_scenario() -> Scenario:
 
 @dataclass(frozen=True)
 class Knob:
-    """One of the paper's Table 2 variations."""
+    """One of the paper's Table 2 variations: the knob role it varies, and the role that
+    stands in for it where an engine has none (with why)."""
 
     key: str
     title: str
     values: tuple[Any, ...]
+    role: KnobRole
     unit: str = ""
-    fields: tuple[str, ...] = ()
-    closest: tuple[tuple[str, str], ...] = ()
+    closest: tuple[KnobRole, str] | None = None
 
 
 KNOBS: tuple[Knob, ...] = (
-    Knob("iterations", "solver iterations", (10, 100, 1000),
-         fields=("iterations", "solver_iterations", "num_solver_iterations", "num_iterations",
-                 "max_iterations")),
-    Knob("shape", "collision shape", ("box", "convex", "mesh"),
-         fields=("collision_shape", "shape", "block_shape", "geometry")),
-    Knob("margin", "collision margin", (1e-3, 1e-5, 1e-6), "m",
-         fields=("collision_margin", "margin", "contact_margin"),
-         closest=(("collision_slop", "the overlap Chipmunk tolerates, its closest "
-                                     "geometric contact tolerance"),)),
-    Knob("substeps", "sub-steps per frame", (2, 20, 200),
-         fields=("substeps", "sub_steps", "num_substeps", "num_sub_steps", "substeps_per_frame")),
-    Knob("rate", "simulation rate", (10, 50, 240), "fps",
-         fields=("fps", "rate", "frame_rate", "frames_per_second", "simulation_rate")),
+    Knob("iterations", "solver iterations", (10, 100, 1000), KnobRole.ITERATIONS),
+    Knob("shape", "collision shape", ("box", "convex", "mesh"), KnobRole.COLLISION_SHAPE),
+    Knob("margin", "collision margin", (1e-3, 1e-5, 1e-6), KnobRole.COLLISION_MARGIN, "m",
+         closest=(KnobRole.CONTACT_SLOP, "the overlap the engine tolerates, its closest "
+                                         "geometric contact tolerance")),
+    Knob("substeps", "sub-steps per frame", (2, 20, 200), KnobRole.SUBSTEPS),
+    Knob("rate", "simulation rate", (10, 50, 240), KnobRole.FRAME_RATE, "fps"),
 )
 
 
@@ -129,7 +124,7 @@ def _shape_option(value: str, options: Sequence[str]) -> str | None:
     return None
 
 
-def _companion(knob: Knob, fields: dict[str, Any]) -> dict[str, Any]:
+def _companion(knob: Knob, cls: type[Engine], fields: dict[str, Any]) -> dict[str, Any]:
     """Fixed partner knobs so that every engine sees the paper's Δt = 1/((n_s + 1)·FPS).
 
     Varying the sub-steps holds the rate at :data:`SUBSTEP_FPS`, varying the rate
@@ -140,12 +135,13 @@ def _companion(knob: Knob, fields: dict[str, Any]) -> dict[str, Any]:
     if other is None:
         return {}
     partner = next(k for k in KNOBS if k.key == other)
-    pf = next((f for f in partner.fields if f in fields), None)
+    pf = cls.knob(partner.role)
     if pf is None:
         return {}
     out: dict[str, Any] = {pf: SUBSTEP_FPS if knob.key == "substeps" else RATE_SUBSTEPS}
-    if "timestep" in fields and type(None) in typing.get_args(fields["timestep"]):
-        out["timestep"] = None
+    step = cls.knob(KnobRole.TIME_STEP)
+    if step is not None and type(None) in typing.get_args(fields[step]):
+        out[step] = None
     return out
 
 
@@ -157,7 +153,7 @@ def map_knob(name: str, cls: type[Engine], knob: Knob) -> _Plan:
     name : str
         Engine name.
     cls : type of Engine
-        Its class (its ``Settings`` fields are read).
+        Its class (its ``knob_roles`` are read).
     knob : Knob
         The paper's variation.
 
@@ -168,7 +164,7 @@ def map_knob(name: str, cls: type[Engine], knob: Knob) -> _Plan:
     """
     plan = _Plan()
     fields = _fields(cls)
-    field_name = next((f for f in knob.fields if f in fields), None)
+    field_name = cls.knob(knob.role)
     if knob.key == "shape":
         if field_name is None:
             plan.skipped.append(Skipped(knob.key, name, f"{name} has no collision-shape knob "
@@ -185,28 +181,28 @@ def map_knob(name: str, cls: type[Engine], knob: Knob) -> _Plan:
                                                  f"{field_name} = {opt}"))
         return plan
     note = ""
-    if field_name is None:
-        closest = next(((f, why) for f, why in knob.closest if f in fields), None)
-        if closest is not None:
-            field_name = closest[0]
-            note = f"{name}.{field_name} stands in for the {knob.title}: {closest[1]}"
+    if field_name is None and knob.closest is not None:
+        field_name = cls.knob(knob.closest[0])
+        if field_name is not None:
+            note = f"{name}.{field_name} stands in for the {knob.title}: {knob.closest[1]}"
     if field_name is not None:
-        companion = _companion(knob, fields)
+        companion = _companion(knob, cls, fields)
         for v in knob.values:
             ov = {field_name: v, **companion}
             extra = "".join(f", {k} = {x}" for k, x in companion.items())
             plan.variations.append(Variation(knob.key, v, name, ov,
                                              f"{field_name} = {v:g}{extra}", note))
         return plan
-    if knob.key in ("substeps", "rate") and "timestep" in fields:
+    step = cls.knob(KnobRole.TIME_STEP)
+    if knob.key in ("substeps", "rate") and step is not None:
         for v in knob.values:
             if knob.key == "substeps":
                 dt = 1.0 / ((v + 1) * SUBSTEP_FPS)
-                why = f"timestep = 1/(({v}+1)·{SUBSTEP_FPS:g} fps) = {dt:.3g} s"
+                why = f"{step} = 1/(({v}+1)·{SUBSTEP_FPS:g} fps) = {dt:.3g} s"
             else:
                 dt = 1.0 / ((RATE_SUBSTEPS + 1) * v)
-                why = f"timestep = 1/(({RATE_SUBSTEPS}+1)·{v} fps) = {dt:.3g} s"
-            plan.variations.append(Variation(knob.key, v, name, {"timestep": dt}, why))
+                why = f"{step} = 1/(({RATE_SUBSTEPS}+1)·{v} fps) = {dt:.3g} s"
+            plan.variations.append(Variation(knob.key, v, name, {step: dt}, why))
         return plan
     plan.skipped.append(Skipped(knob.key, name, f"{name} has no {knob.title} knob "
                                 f"(knobs: {', '.join(fields)})"))

@@ -44,8 +44,9 @@ from rockbench.analytic.overturning import (
 )
 from rockbench.errors import RockbenchError, ScenarioError
 from rockbench.evaluation import rocking_impacts
+from rockbench.geometry import RockingProperties
 from rockbench.runner import ExecutionOptions, Job, TaskFault, map_tasks, run_jobs
-from rockbench.scenarios import Block, Contact, RockingProperties, Scenario, Stack, get_scenario
+from rockbench.scenarios import Block, Contact, Scenario, get_scenario, single
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = [
@@ -280,7 +281,7 @@ def _engine_scenario(spec: BlockSpec, kind: str, w: float, a: float, settle: flo
                      rate: float) -> Scenario:
     rock = spec.rock
     exc = pulse_excitation(kind, a * spec.g * rock.lam, w * rock.p)
-    return Scenario(name=f"spectrum-{kind}-w{w:.4g}-a{a:.4g}", stack=Stack((spec.block,)),
+    return Scenario(name=f"spectrum-{kind}-w{w:.4g}-a{a:.4g}", geometry=single(spec.block),
                     contact=spec.contact, excitation=exc,
                     duration=exc.end_time + settle / rock.p, output_rate=rate, g=spec.g)
 

@@ -1,9 +1,10 @@
 """Settings sweeps: the grid of engine knobs on one scenario, accuracy versus cost.
 
 :func:`run_sweep` runs the cartesian grid of engine knobs given as
-``engine.knob=v1,v2,...`` on one scenario through the one dispatcher, measures
-each point against the analytic reference (:mod:`rockbench.studies.recording`)
-and returns typed :class:`SweepPoint` s. :func:`cheapest` picks the cheapest
+``engine.knob=v1,v2,...`` on one scenario through the campaign
+(:func:`rockbench.campaign.run_campaign`: each point measured against the
+analytic reference and recorded as it finishes) and returns typed
+:class:`SweepPoint` s. :func:`cheapest` picks the cheapest
 point that meets a target error, :func:`efficient_points` is each engine's
 Pareto front (:func:`rockbench.studies.pareto.pareto_front`), and
 :mod:`rockbench.studies.tune` searches knob ladders automatically. The
@@ -20,23 +21,21 @@ import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
-from rockbench.engines import engine_class
+from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
 from rockbench.errors import RockbenchError
 from rockbench.evaluation import RunMetrics
 from rockbench.method import Method
 from rockbench.presets import typed_settings
-from rockbench.runner import ExecutionOptions, Job, run_jobs
+from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario
-from rockbench.store import Store
 from rockbench.studies.pareto import pareto_front
-from rockbench.studies.recording import finish_run
-from rockbench.studies.references import references
-from rockbench.trajectory import Status, Trajectory
+from rockbench.trajectory import Status
 
 __all__ = ["SweepError", "SweepPoint", "SweepResult", "parse_grid", "run_sweep", "run_points",
-           "grid_points", "cheapest", "efficient_points", "sweep_reference", "ERROR_METRICS",
+           "grid_points", "cheapest", "efficient_points", "ERROR_METRICS",
            "DRIFT_WIDTH", "DRIFT_WOBBLE", "KIND"]
 
 #: The store's ``kind`` of runs made by this study.
@@ -195,60 +194,45 @@ def grid_points(grid: Mapping[str, Sequence[Any]]) -> list[dict[str, Any]]:
             for combo in itertools.product(*(grid[k] for k in knobs))]
 
 
-def sweep_reference(scenario: Scenario, store: Store | None,
-                    execution: ExecutionOptions | None) -> tuple[Trajectory | None, str]:
-    """The analytic reference of ``scenario`` and why it is not usable ('' if it is)."""
-    refs, notes = references([scenario], store, execution=execution)
-    return refs[scenario.name], notes.get(scenario.name, "")
-
-
 def run_points(
     scenario: Scenario,
     points: Sequence[tuple[str, Mapping[str, Any], Mapping[str, Any]]],
-    reference: Trajectory | None,
     *,
-    store: Store | None = None,
+    db: Path | None = None,
     resume: bool = False,
     kind: str = KIND,
-    reference_note: str = "",
     execution: ExecutionOptions | None = None,
     on_point: Callable[[SweepPoint], None] | None = None,
-) -> list[SweepPoint]:
+) -> tuple[list[SweepPoint], str]:
     """Run explicit points ``(engine, knobs, full settings)`` of one scenario.
 
-    Each run is measured and recorded as it finishes
-    (:func:`rockbench.studies.recording.finish_run`); with ``resume`` a point
-    already in the store (same scenario content, engine version and settings)
-    is taken from it. Returns the points in the order given.
+    Each run is measured against the analytic reference and recorded as it
+    finishes (:func:`rockbench.campaign.run_campaign`); with ``resume`` a point
+    already in the store (the same identity) is taken from it.
+
+    Returns
+    -------
+    points : list of SweepPoint
+        In the order given.
+    reference_note : str
+        Why there is no usable reference ('' if there is one).
     """
-    versions = {e: engine_class(e).version() for e in {e for e, _, _ in points}}
-    out: list[SweepPoint | None] = [None] * len(points)
-    jobs, index = [], {}
-    for i, (engine, knobs, settings) in enumerate(points):
-        method = Method.of(engine, settings)
-        old = (store.find(scenario, method, engine_version=versions[engine])
-               if resume and store is not None else None)
-        if old is not None and old.metrics is not None:
-            out[i] = SweepPoint(method, dict(knobs), old.metrics, _drift(old.metrics, scenario))
-            if on_point is not None:
-                on_point(out[i])
-            continue
-        job = Job(scenario, engine, method.settings)
-        index[id(job)] = i
-        jobs.append(job)
+    plan = [PlannedRun(scenario, Method.of(engine, settings)) for engine, _, settings in points]
+    knobs = {p.method: dict(k) for p, (_, k, _) in zip(plan, points, strict=True)}
 
-    def finished(job: Job, traj: Trajectory) -> None:
-        i = index[id(job)]
-        engine, knobs, _ = points[i]
-        method = Method.of(engine, job.settings)
-        m = finish_run(store, scenario, method, traj, reference, kind=kind,
-                       engine_version=versions[engine], reference_note=reference_note)
-        out[i] = SweepPoint(method, dict(knobs), m, _drift(m, scenario))
+    def point(res: Any) -> SweepPoint:
+        return SweepPoint(res.method, knobs[res.method], res.metrics,
+                          _drift(res.metrics, scenario))
+
+    def finished(res: Any, _: Any) -> None:
         if on_point is not None:
-            on_point(out[i])
+            on_point(point(res))
 
-    run_jobs(jobs, execution, on_result=finished)
-    return [p for p in out if p is not None]
+    campaign = run_campaign(plan, CampaignOptions(
+        kind=kind, db=db, resume=resume, execution=execution or ExecutionOptions(),
+        timeout=(execution or ExecutionOptions()).timeout), on_result=finished)
+    return ([point(r) for r in campaign.results],
+            campaign.reference_notes.get(scenario.name, ""))
 
 
 def run_sweep(
@@ -257,12 +241,11 @@ def run_sweep(
     *,
     base: Mapping[str, Mapping[str, Any]] | None = None,
     metric: str = "max_error",
-    store: Store | None = None,
+    db: Path | None = None,
     resume: bool = False,
     kind: str = KIND,
     execution: ExecutionOptions | None = None,
     on_point: Callable[[SweepPoint], None] | None = None,
-    reference: Trajectory | None = None,
 ) -> SweepResult:
     """Run every grid point of every engine on ``scenario``.
 
@@ -277,8 +260,8 @@ def run_sweep(
         Engine → settings applied under the grid knobs (preset, ``--set``).
     metric : str
         Error metric of :data:`ERROR_METRICS` used for ranking.
-    store : Store, optional
-        Every run is appended as it finishes (``kind``), the reference cached.
+    db : Path, optional
+        The results store: every run is appended as it finishes, the reference cached.
     resume : bool
         Reuse stored runs of identical points.
     kind : str
@@ -287,22 +270,16 @@ def run_sweep(
         Workers, time limit, executor.
     on_point : callable, optional
         Called with each finished point.
-    reference : Trajectory, optional
-        The analytic reference if already known.
     """
     if metric not in ERROR_METRICS:
         raise SweepError(f"unknown metric {metric!r}; choose one of {', '.join(ERROR_METRICS)}")
     base = base or {}
-    note = ""
-    if reference is None:
-        reference, note = sweep_reference(scenario, store, execution)
     points = [(engine, knobs, {**base.get(engine, {}), **knobs})
               for engine, g in grid.items() for knobs in grid_points(g)]
-    result = SweepResult(scenario, {e: dict(g) for e, g in grid.items()}, metric=metric,
-                         reference_note=note)
-    result.points = run_points(scenario, points, reference, store=store, resume=resume,
-                               kind=kind, reference_note=note, execution=execution,
-                               on_point=on_point)
+    result = SweepResult(scenario, {e: dict(g) for e, g in grid.items()}, metric=metric)
+    result.points, result.reference_note = run_points(
+        scenario, points, db=db, resume=resume, kind=kind, execution=execution,
+        on_point=on_point)
     return result
 
 

@@ -9,7 +9,7 @@ once the motion is developed (a block turned by ten times :data:`ONSET_ROTATION`
 or displaced by ten times :data:`ONSET_DISPLACEMENT` of its size relative to the
 base: the blocks whose motion is then at least :data:`MOVED_FRACTION` of the
 largest). α at the onset is compared with the limit-analysis factor of
-:func:`rockbench.analytic.limit_analysis.limit_analysis` (the scenario's
+:func:`rockbench.analytic.static_collapse.limit_analysis` (the scenario's
 friction, real Coulomb joints, loads toward ``direction``) and the blocks with
 its mechanism.
 
@@ -37,7 +37,7 @@ quasi-static by halving it (:func:`quasi_static`): the onset factor changes by
 the difference of the two lags, and the Richardson extrapolation
 :attr:`TiltComparison.extrapolated_factor` with that exponent removes the lag.
 
-Runs go through the one pipeline (:func:`rockbench.runner.run_jobs`), so
+Runs go through the campaign (:func:`rockbench.campaign.run_campaign`), so
 their cost (CPU and wall time per run) is recorded next to the accuracy.
 """
 
@@ -46,25 +46,26 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from rockbench.analytic.limit_analysis import LimitResult, limit_analysis
+from rockbench.analytic.static_collapse import LimitResult, limit_analysis
+from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
 from rockbench.method import Method
-from rockbench.runner import ExecutionOptions, Job, run_jobs
+from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario
-from rockbench.scenarios.assembly import limit_assembly
 from rockbench.scenarios.excitation import TiltTable
-from rockbench.store import Store
-from rockbench.studies.recording import finish_run
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["ONSET_ROTATION", "ONSET_DISPLACEMENT", "DEVELOPED", "MOVED_FRACTION", "SETTLE",
+__all__ = ["KIND", "ONSET_ROTATION", "ONSET_DISPLACEMENT", "DEVELOPED", "MOVED_FRACTION", "SETTLE",
            "TiltOutcome",
            "TiltComparison", "tilt_scenario", "tilt_outcome", "reference", "tilting_table",
            "quasi_static"]
 
+#: The store's ``kind`` of runs made by this study.
+KIND = "tilting"
 #: Rotation relative to the rest pose (rad) that marks the onset of motion.
 ONSET_ROTATION = 2e-4
 #: Displacement relative to the base, as a fraction of the block's size, that marks it.
@@ -208,14 +209,14 @@ def reference(scenario: Scenario, direction: int = 1) -> LimitResult:
     """The limit-analysis collapse of ``scenario``'s blocks under loads toward ``direction``.
 
     The scenario's base friction at every joint, real (non-associative)
-    Coulomb joints (:mod:`rockbench.analytic.limit_analysis`): where no joint
+    Coulomb joints (:mod:`rockbench.analytic.static_collapse`): where no joint
     slides it is the associative factor; on a running-bond wall it is the
     stepped wedge that turns out of the wall with its head joints opening
     (6 × 3 wall: 11/19 = 0.579), where the associative LP leans on friction at
     head joints that nothing presses (0.992).
     """
     mu = scenario.contact.friction
-    return limit_analysis(limit_assembly(scenario.stack), friction=mu, direction=direction,
+    return limit_analysis(scenario.geometry, friction=mu, direction=direction,
                           g=scenario.g,
                           flow="non-associative" if math.isfinite(mu) else "associative")
 
@@ -280,22 +281,21 @@ class TiltComparison:
         return self.half.moved == self.limit.moving_blocks
 
 
-def _jobs(scenarios: Sequence[Scenario], engine: str, settings: Mapping[str, Any],
-          rate: float, direction: int, limits: Sequence[LimitResult],
-          overshoot: float) -> list[Job]:
-    jobs = []
+def _plan(scenarios: Sequence[Scenario], method: Method, rate: float, direction: int,
+          limits: Sequence[LimitResult], overshoot: float) -> list[PlannedRun]:
+    plan = []
     for sc, lim in zip(scenarios, limits, strict=True):
         alpha_end = overshoot * lim.load_factor + 0.02
         for r in (rate, 0.5 * rate):
-            jobs.append(Job(tilt_scenario(sc, r, direction=direction, alpha_end=alpha_end),
-                            engine, dict(settings)))
-    return jobs
+            plan.append(PlannedRun(tilt_scenario(sc, r, direction=direction,
+                                                 alpha_end=alpha_end), method))
+    return plan
 
 
 def tilting_table(scenarios: Sequence[Scenario], engine: str, *, rate: float = 0.05,
                   direction: int = 1, settings: Mapping[str, Any] | None = None,
                   execution: ExecutionOptions | None = None,
-                  overshoot: float = 1.3, store: Store | None = None) -> list[TiltComparison]:
+                  overshoot: float = 1.3, db: Path | None = None) -> list[TiltComparison]:
     """Tilt each scenario at ``rate`` and ``rate / 2`` in ``engine``; compare with the LP.
 
     Parameters
@@ -314,9 +314,10 @@ def tilting_table(scenarios: Sequence[Scenario], engine: str, *, rate: float = 0
         How the runs are executed (default: one isolated worker).
     overshoot : float
         Each run lasts until α = overshoot · α_LP + 0.02.
-    store : Store, optional
-        Where each run is recorded as it finishes (kind ``tilting``; no
-        analytic trajectory reference).
+    db : Path, optional
+        The results store, where each run is recorded as it finishes (kind
+        ``tilting``; limit analysis is the reference of the onset, not of a
+        trajectory).
 
     Returns
     -------
@@ -333,17 +334,12 @@ def tilting_table(scenarios: Sequence[Scenario], engine: str, *, rate: float = 0
         if lim.status != "collapse":
             raise ValueError(f"{sc.name}: limit analysis finds no collapse ({lim.status})")
     s = dict(settings or {})
-    jobs = _jobs(scenarios, engine, s, rate, direction, limits, overshoot)
-
-    def finished(job: Job, traj: Trajectory) -> None:
-        finish_run(store, job.scenario, Method.of(job.engine, job.settings), traj, None,
-                   kind="tilting", reference_note="tilting table: limit analysis is the "
-                                                  "reference of the onset, not of a trajectory")
-
-    trajs = run_jobs(jobs, execution, on_result=finished if store is not None else None)
-    outcomes = [tilt_outcome(t, j.scenario, lim.load_factor)
-                for t, j, lim in zip(trajs, jobs, [x for x in limits for _ in (0, 1)],
-                                     strict=True)]
+    plan = _plan(scenarios, Method.of(engine, s), rate, direction, limits, overshoot)
+    ex = execution or ExecutionOptions()
+    campaign = run_campaign(plan, CampaignOptions(
+        kind=KIND, db=db, keep=True, references=False, execution=ex, timeout=ex.timeout))
+    outcomes = [tilt_outcome(campaign.trajectories[run.key], run.scenario, lim.load_factor)
+                for run, lim in zip(plan, [x for x in limits for _ in (0, 1)], strict=True)]
     return [TiltComparison(engine, sc.name, direction, lim, outcomes[2 * k], outcomes[2 * k + 1], s)
             for k, (sc, lim) in enumerate(zip(scenarios, limits, strict=True))]
 

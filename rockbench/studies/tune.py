@@ -12,39 +12,33 @@ import math
 import typing
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
-from rockbench.engines import engine_class
+from rockbench.engines import KnobRole, engine_class
 from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario
-from rockbench.store import Store
-from rockbench.studies.sweep import SweepError, SweepPoint, run_points, sweep_reference
+from rockbench.studies.sweep import SweepError, SweepPoint, run_points
 
 __all__ = ["tune", "TuneResult", "tunable_knobs", "KIND"]
 
 #: The store's ``kind`` of runs made by this study.
 KIND = "tune"
-_FINER_SMALLER = ("timestep", "time_step", "dt")
-_FINER_LARGER = ("iterations", "substeps", "sub_steps", "num_substeps", "solver_iterations",
-                 "num_solver_iterations")
+#: The roles whose knobs are tuned by default: what sets the cost.
+COST_ROLES = (KnobRole.TIME_STEP, KnobRole.ITERATIONS, KnobRole.SUBSTEPS)
 
 
 def tunable_knobs(engine: str) -> dict[str, str]:
-    """Cost knobs of an engine recognised by name: knob → ``"smaller"`` or ``"larger"``.
+    """The cost knobs of an engine (its time step, iterations and sub-steps, as it declares
+    them in ``knob_roles``) that hold a number: knob → ``"smaller"`` or ``"larger"``.
 
     ``smaller`` means a smaller value is finer (time steps, tolerances),
     ``larger`` a larger one (iterations, sub-steps).
     """
-    cls = engine_class(engine).Settings
-    hints = typing.get_type_hints(cls)
-    out = {}
-    for name, kind in hints.items():
-        low = name.lower()
-        if kind is float and low in _FINER_SMALLER:
-            out[name] = "smaller"
-        elif kind is int and low in _FINER_LARGER:
-            out[name] = "larger"
-    return out
+    cls = engine_class(engine)
+    hints = typing.get_type_hints(cls.Settings)
+    return {k: role.finer for k, role in cls.knob_roles.items()
+            if role in COST_ROLES and role.finer is not None and hints[k] in (int, float)}
 
 
 def _ladder(default: Any, direction: str, kind: type) -> list[Any]:
@@ -76,7 +70,7 @@ def tune(
     base: Mapping[str, Any] | None = None,
     metric: str = "max_error",
     budget: int = 30,
-    store: Store | None = None,
+    db: Path | None = None,
     execution: ExecutionOptions | None = None,
     on_point: Callable[[SweepPoint], None] | None = None,
 ) -> TuneResult:
@@ -107,7 +101,7 @@ def tune(
         One of :data:`ERROR_METRICS`.
     budget : int
         Largest number of runs.
-    store, execution, on_point
+    db, execution, on_point
         As in :func:`rockbench.studies.sweep.run_sweep`.
 
     Raises
@@ -136,7 +130,6 @@ def tune(
     defaults = cls.settings(preset, **{k: v for k, v in base.items() if k != "preset"})
     ladders = {k: _ladder(getattr(defaults, k), d, hints[k]) for k, d in kinds.items()}
     names = list(ladders)
-    ref_traj, note = sweep_reference(scenario, store, execution)
     seen: dict[tuple[int, ...], SweepPoint] = {}
 
     def evaluate(idxs: list[tuple[int, ...]]) -> None:
@@ -146,8 +139,7 @@ def tune(
         wanted = {tuple(ladders[n][j] for n, j in zip(names, i, strict=True)): i for i in idxs}
         todo = [(engine, dict(zip(names, v, strict=True)),
                  {**base, **dict(zip(names, v, strict=True))}) for v in wanted]
-        for p in run_points(scenario, todo, ref_traj, store=store, kind=KIND,
-                            reference_note=note, execution=execution):
+        for p in run_points(scenario, todo, db=db, kind=KIND, execution=execution)[0]:
             i = wanted[tuple(p.knobs[n] for n in names)]
             seen[i] = p
             if on_point is not None:
