@@ -73,7 +73,7 @@ def test_stack_at_rest_stays_at_rest() -> None:
     tr = MujocoEngine().simulate(sc, "accurate")
     assert tr.status == Status.OK
     assert np.max(np.abs(tr.theta)) < 1e-6
-    c0 = sc.stack.centroids
+    c0 = sc.geometry.centroids
     assert np.max(np.abs(tr.x[-1] - c0[:, 0])) < 1e-6
     assert np.max(np.abs(tr.z[-1] - c0[:, 1])) < 1e-5  # contact penetration only
 

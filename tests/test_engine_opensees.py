@@ -17,6 +17,9 @@ from rockbench.geometry import Block, Geometry, stack
 from rockbench.geometry.polygon import penetration, rotate
 from rockbench.scenarios import Contact, Scenario, SinePulse, get_scenario
 
+# every test here runs engines for seconds (measured with --durations): the slow tier
+pytestmark = pytest.mark.slow
+
 try:
     OpenseesEngine.check_available()
 except EngineUnavailable as exc:  # pragma: no cover - depends on the environment
@@ -345,10 +348,9 @@ def test_rockingbc_refuses_assemblies() -> None:
 
 # Tilting table at 0.05 /s and 0.025 /s (accurate preset), measured: parapet onsets
 # 0.1310 / 0.1289 against the LP's 0.125 (+3.1 %), the LP mechanism (the parapet
-# alone), 17 s of CPU. The 5-drum column, built since issue 25 with the column model,
-# ends unstable (NaN) with no onset (module docstring: its heavy joints); with the
-# model of the other geometries it measured 0.2487 / 0.2456 against 0.24 (+2.3 %),
-# the column as one body.
+# alone), 17 s of CPU. The 5-drum column (fixed-orientation joints: the column model
+# ends unstable, NaN at 11.35 s, see COLUMN_MODEL_BLOCKS) measured 0.2487 / 0.2456
+# against 0.24 (+2.3 %), the column as one body.
 def test_tilting_table_onset_matches_the_collapse_factor() -> None:
     check_tilting_table("opensees")
 

@@ -1,199 +1,42 @@
 """OpenSees engine plugin (OpenSeesPy): rigid blocks on compression-only interface springs.
 
-The structural engineer's model of a rocking block, in OpenSees's planar
-``basic`` model (``-ndm 2 -ndf 3``), whose (X, Y) plane is our (x, z) plane.
-OpenSees's rotation is counter-clockwise positive while our θ (about +y) is
-positive when the top moves toward +x, so θ = −r_z.
+The structural engineer's model of a rocking block, in OpenSees's planar ``basic``
+model (``-ndm 2 -ndf 3``), whose (X, Y) plane is our (x, z) plane; OpenSees's rotation
+is counter-clockwise positive, so θ = −r_z. Each block is a node at its centroid with
+the block's mass and inertia, joined to massless interface nodes by stiff
+``elasticBeamColumn`` elements with a ``Corotational`` transformation (exact rigid-body
+kinematics at large rotations). Each interface that exists at rest (the base, and every
+joint between blocks or with a fixed support) carries ``springs`` contact points
+between its pivots; at each, a ``flatSliderBearing`` joins the two sides, with an
+elastic no-tension spring normal to the interface and Coulomb friction along it. The
+interface's stiffness is K = M (2π ``contact_frequency``)² for the mass M it carries.
+Impacts lose energy in dashpots (ζ = ``damping_ratio``) that act only beyond a
+compression ``damping_onset`` · g/ω_c², so that a pivot lifts off freely. A column of
+one or two blocks (single blocks, the paper's stack, parapets) has contact nodes that
+turn with the blocks; any other geometry (taller drum columns, walls, arches) has
+fixed-orientation joints and starts from a static gravity analysis. The base motion (along x only) is a uniform excitation: the
+base nodes are fixed, every block gets the inertial load −m ü_g(t) and the reported
+positions add u_g(t). Newmark (or HHT, generalized-α) integration, Newton–Raphson with
+Krylov–Newton and fixed-iteration fallbacks (counted in ``unconverged_steps``).
 
-Model (one per scenario, built from the same :class:`Scenario` as every engine).
-A column (:attr:`rockbench.geometry.Geometry.column`: upright rectangular
-blocks each on the one below, the bottom one on the base: a single block, the
-paper's stacks, the catalog's drum columns and parapets) gets the model of this
-list; any other geometry the one of the paragraph after it:
+Presets and knobs:
 
-* **Blocks.** Each block is a node at its centroid carrying the block's mass
-  ``m`` (both translations) and centroidal inertia ``Block.inertia[1]``, joined
-  to massless interface nodes on its faces by ``elasticBeamColumn`` elements
-  with a ``Corotational`` transformation, ``body_stiffness`` times stiffer than
-  the interface they serve (axially and in bending). The corotational beams keep
-  the rigid-body kinematics exact at large rotations, which OpenSees's
-  ``rigidLink`` (a constant, small-rotation constraint matrix) would not.
-* **Interfaces.** The base and every block-to-block interface carry ``springs``
-  contact points spread evenly between the interface's pivots (the pivots
-  included; end points get half the tributary length). The base interface spans
-  the bottom block's pivots (b − chamfer); a block-to-block interface spans the
-  overlap of the two facing pivot spans. At each point a ``flatSliderBearing``
-  joins the two sides: its axial material is an elastic no-tension (``ENT``)
-  spring and its shear obeys Coulomb friction (``frictionModel Coulomb`` with
-  the scenario's μ, normal force from the spring; ``friction`` on every
-  interface of a column, ``interface_friction`` is not applied there), so the
-  point carries no force at all once it lifts off. With μ = 0 a ``zeroLength``
-  element with the same spring carries the normal force alone. The contact
-  elements keep their global orientation (normal along z), exact on the base;
-  on a block-to-block interface the normal is off by the lower block's tilt, a
-  second-order error in the gap while that tilt stays small. The interface's vertical stiffness is
-  K = M ω_c² (M: the mass it carries, ω_c = 2π ``contact_frequency``), shared
-  by the points in proportion to their tributary lengths; the shear stiffness
-  before slip equals the normal one.
-* **Impact damping.** Energy at impact is lost in dashpots c = β k at the
-  contact points, which act only while a point is compressed by more than
-  d_0 = ``damping_onset`` · g/ω_c²: a parallel ``zeroLength`` element with a
-  gate spring of stiffness ε k (ε = 1e-3, which shifts the stiffness by
-  0.1 %) and stiffness-proportional Rayleigh damping β/ε on its *current*
-  tangent, which is zero in tension and, with ``ElasticBilin`` as the gate
-  (``ENT`` when d_0 = 0), below d_0. β = 2ζ/ω_c, ζ = ``damping_ratio`` of the
-  interface's vertical mode. The onset is what lets a pivot lift off freely:
-  a corner carrying the block's weight is compressed by about 2 g/ω_c² (two
-  points share K), and a dashpot acting there pulls the separating corner down
-  (module docstring, calibration).
-* **Base motion.** Uniform excitation: the base nodes are fixed and every
-  block's mass gets the inertial load −m ü_g(t) (a ``Path`` series of the
-  scenario's acceleration at every step time), so the model moves relative to
-  the base; the reported positions add the scenario's exact u_g(t). Chosen over
-  an imposed base displacement because the ground is rigid: the relative
-  equations of motion are then exactly the absolute ones with the base moving
-  by the scenario's consistent (ü_g, u̇_g, u_g) from rest, with no numerical
-  differentiation of u_g and nothing for the base's own (massless) nodes to
-  get wrong. Rayleigh damping acts on relative velocities, which is what the
-  contact dashpots should see.
-* **Integration.** ``Newmark`` (average acceleration, γ = 1/2, β = 1/4) or
-  ``HHT`` (``integrator = "hht"`` with ``alpha`` in [2/3, 1]) at ``timestep``,
-  Newton–Raphson on the displacement increment; a step that fails to converge
-  is retried with Krylov–Newton, then taken with a fixed number of Newton
-  iterations (counted in ``unconverged_steps``).
+* ``accurate`` (the defaults): 2 points per interface, f_c = 1 kHz, ζ = 1.6, onset 2.5,
+  Δt 0.05 ms.
+* ``fast``: f_c = 200 Hz, Δt 0.5 ms.
+* ``winkler``: the literature's bed of 10 points per interface (not calibrated to
+  Housner's η).
+* ``rockingbc``: OpenSees's ``RockingBC`` macroelement for a single block (``element``).
 
-Any other geometry (:class:`~rockbench.geometry.Geometry` whose ``column`` is
-None: blocks and convex prisms at given poses, fixed supports, e.g. a
-running-bond wall or an arch) gets the same model on every interface that
-exists at rest (:attr:`~rockbench.geometry.Geometry.interfaces`: face-to-face
-contacts, bed and head joints, an arch's radial joints): ``springs`` points
-spread along the interface, each a
-pair of nodes, one on each body (a fixed node on a support or the base, which
-move with the base), joined by the same ``flatSliderBearing`` (or, with μ = 0,
-``zeroLength``) and gated dashpot, oriented once along the interface's normal
-and tangent at rest (μ: ``friction`` against a support or the base,
-``interface_friction`` between blocks). The contact nodes do not turn: the beams
-from the centroid are pinned at them (``-release``), because the slider adds a
-small-rotation P-Δ term −V r_i (r_i: its first node's rotation) to its normal
-force, and with nodes that turned with the bodies its friction iteration failed
-on a tilting 5-drum column at 0.5 rad (a column keeps its nodes turning with the
-blocks, unchanged). An interface carries K = M ω_c² as a column's does, M the
-mass it carries (:meth:`OpenseesEngine.assembly_interfaces`), and the slider's
-shear iteration converges to 1e-12 of the weight the joint carries (OpenSees's
-default, 1e-12 N, is below the round-off of a heavy joint). Gravity is applied
-by a static analysis before the run, so the scene starts in exact equilibrium on
-its springs (as does an upright column whose blocks are not all centred, whose
-interfaces a uniform settlement would not balance). Measured (``accurate``): at
-rest for 0.5 s the 9-voussoir arch t/R = 0.2 keeps its poses to 1.3e-14 λ and
-6e-16 m (under 1.5 s of CPU), the 6 × 3 running-bond wall to 9e-11 λ and 7e-12
-m, but at 10 s of CPU (its head joints sit at zero compression, where Newton
-cycles between the no-tension springs' two tangents); the arch under a pulse at
-half its collapse acceleration rides with its supports (displacement within 4e-7
-of the base's, 4e-6 λ of turn). The four assembly checks of the conformance kit pass.
+Known limits: the springs are laid on the joints at rest, so bodies that come into
+contact later pass through each other (the run stops as ``unstable`` when a pair the
+engine names, :meth:`OpenseesEngine.unmodelled_pairs`, overlaps), and large sliding
+is not followed; heavy drum columns can fail the slider's friction iteration. OpenSees
+keeps one global model per process (``wipe()`` at every build); OpenSeesPy is free for
+research, education and internal use only.
 
-The catalog's drum columns and parapets are columns (issue 25): they get the
-column model, with one μ (``friction``) on every joint and contact nodes that
-turn with the blocks. Measured (``accurate``): at rest for 0.5 s the 5-drum
-column keeps its poses to 1.0e-15 λ and 1.4e-10 m (its closed-form
-settlement), the parapet 0.25 m off-centre to 1.5e-14 λ and 6e-16 m (settled
-statically); on the tilting table at 0.05 and 0.025 /s the parapet's onsets are
-0.1310 / 0.1289 (LP 0.125, +3.1 %), the LP's mechanism (the parapet alone), at
-17 s of CPU. The drum columns' joints are heavy (4.6 to 46 kN): under the
-catalog's 2 Hz, 30 mm pulse the slider's shear iteration fails on them (its
-1e-12 N tolerance, with the nodes' P-Δ term) and the run stops as ``unstable``
-(NaN) at 0.4 s on the 5- and 10-drum columns (at 0.88 s on the 3-drum one with
-``fast``), and on the tilting table the 5-drum column ends ``unstable`` (NaN) with
-no onset found. Built with the model of the paragraph above (before issue
-25) they ran: onsets 0.2487 / 0.2456 on the tilting table (LP 0.24, +2.3 %), the
-column as one body, with about 1100 of its steps taken with fixed Newton
-iterations (Newton stagnates at an increment of 1e-7 m, a contact switching
-state between iterations, see ``_retry_step``).
-
-What the model cannot represent, by construction: the interface springs are
-laid once, on the joints that exist at rest, and carry their contact points
-with the bodies. A mechanism that brings bodies into contact that were not
-touching at rest finds nothing there: they pass through each other (measured: a
-0.2 × 0.8 m block 1 cm from a 0.4 × 0.4 m block, pushed toward it by a 2 Hz
-pulse at twice its uplift acceleration, overlaps it by 1.2 cm at 0.08 rad, by
-its whole width at 0.66 rad; the same holds for a block tipping onto the base
-beyond its own face). The engine names those pairs (:meth:`OpenseesEngine.unmodelled_pairs`)
-and the run stops as ``unstable`` where one of them overlaps (the example: at
-0.241 s, by 3.2 mm, at the first checked sample past 1e-3 of the smaller block's
-size; samples are checked every 0.02 s). Large sliding is not followed either: a contact
-point stays at its place on both bodies, so a block that slides along a joint
-keeps being carried by springs that have left the face, and a joint's normal
-stays that at rest (second order in the rotation, as on a stack). Results are
-meaningful up to the onset of a mechanism of the joints at rest and through
-its rocking while no new contact forms; the tilting table's onset is that.
-
-The initial state is set as displacements of the upright model: the rigid
-rotation θ0 about the pivot for a tilted start (the lifted points start open),
-or the static settlement under gravity for an upright one (every interface
-compressed uniformly by its load, exact static equilibrium), so nothing rings
-at t = 0.
-
-Calibration (``benchmarks/calibrate_opensees.py``, OpenSees 3.7.1). Two
-knobs set the energy an impact removes: the dashpots' damping ratio ζ and
-their onset d_0. ``--search`` runs B0–B3 from 0.5 λ for a grid of one knob
-(``--knob``), up to their third impact or over ``--search-duration`` s. With
-one contact point at each pivot (``springs = 2``: Housner's own assumption of
-an impact at the corner) the result barely depends on ζ once the contact does
-not bounce: at f_c = 1 kHz, Δt = 50 µs every ζ in 1.45–1.7 keeps
-max |θ − θ_ref| ≤ 0.004 λ and the three impact times within 0.4 % on all four
-blocks, and ``accurate`` takes ζ = 1.6.
-
-The onset is what makes the late, small impacts right. With the dashpots
-acting from first contact (d_0 = 0, the model before issue 16) the energy kept
-per impact on B0 is Housner's η² = 0.888 down to 0.09 λ, then drops in steps:
-0.873 from 0.055 to 0.006 λ, 0.841 at 0.003 λ, 0.72 at 1e-4 λ. Each step is
-one more time step during which the corner that lifts off is still compressed
-after the impact (it leaves its static compression, ≈ 2 g/ω_c², at a speed
-that falls with the amplitude), and in that step its dashpot pulls it down
-harder than its spring pushes: a sticky contact that Housner's impact does not
-have (the share of the impact loss spent with a point in tension grows from
-6 % at large amplitude to 20–30 % at the end). B0 then comes to rest 2 s early
-(0.038 λ over 20 s); a stiffer contact only delays it (2 kHz, Δt = 25 µs:
-0.009 λ at four times the cost). With d_0 = 2.5 g/ω_c² the lifting corner's
-dashpot never acts (its dissipation is zero at every impact), while the
-impacting corner, compressed 10–30 times further, is damped as before: the
-energy kept per impact stays within 0.003 of η² down to 0.003 λ, and over 20 s
-B0, B1, B2 and B3 from 0.5 λ stay within 0.0022, 0.0036, 0.0021 and 0.0007 λ
-of Housner (impact times within 0.36 %). d_0 = 3 gives 0.0028 λ on B0, d_0 = 5
-0.015 λ (the impacting corner's dashpot then misses the start of the smallest
-impacts). What is left: below ~5e-4 λ the contact, undamped under the onset,
-keeps the block rocking at ~1e-4 λ instead of bringing it to rest. All ten
-free cases stay within 0.0074 λ over 20 s (the 0.99 λ releases are the worst),
-the six Single #2 pulse peaks within −0.04 to +0.23 % of Housner (before:
-0.8–1.7 % low) and the paper's eight two-block pulse peaks within −3.4 to
-+4.9 % of the two-block model (before: −18 to +16 %), at 15–25 s of CPU per
-20 s case. ``fast`` (f_c = 200 Hz, Δt = 0.5 ms, the same ζ and onset) keeps the
-first three impact times within 1.7 % and max |θ − θ_ref| ≤ 0.053 λ over 20 s
-(before: 0.20 λ, B0 at rest early) and the pulse peaks within −0.3 to +2.2 %
-(before: 2.4–6.3 % low), at a tenth of the cost.
-
-A Winkler bed of 10 points per interface (the ``winkler`` preset, no onset)
-spreads each impact over the whole face, and no single ζ matches Housner's η
-on all blocks (B0 and B1 need ζ ≈ 3.5, B3 ≈ 5 at f_c = 500 Hz, with impact
-times moving by several per cent between neighbouring ζ). Alternatives tried:
-plastic impacts by numerical damping alone (``integrator = "generalized-alpha"``,
-ρ∞ = 0, no dashpots, f_c = 20 kHz, Δt = 0.1 ms) did not converge (16808 of
-36000 steps of B0 taken with fixed iterations, 0.9 λ off).
-
-Alternative element: ``element = "rockingbc"`` (preset ``rockingbc``) replaces
-the springs of a single block by OpenSees's ``RockingBC`` macroelement
-(Avgenakis & Psycharis 2020), a deformable rocking body whose base uplifts
-and impacts without contact springs; its knobs, cost and accuracy are in
-:class:`OpenseesSettings`.
-
-Library notes: the ``openseespy`` 3.8.0.0 wheel needs ``openseespylinux`` 3.8,
-which the package index does not offer for Python 3.11, so pip installs
-3.7.1.2. Its Linux binary bundles ``libblas.so.3`` but does not find it
-(OpenSeesPyDoc issue #319); :meth:`OpenseesEngine.library` loads the bundled
-copy first. OpenSees keeps one global model per process: every build and
-teardown calls ``wipe()``. At interpreter exit OpenSees writes "Process 0 Terminating" to the
-C stderr; :func:`_filter_exit_stderr` drops that one line.
-Licence: OpenSeesPy is free for research, education and internal use;
-commercial redistribution needs a licence from its authors.
+See :doc:`the engine's page </engines/opensees>` in the documentation for its
+calibration, measured accuracy and cost.
 """
 
 from __future__ import annotations
@@ -222,7 +65,7 @@ __all__ = ["OpenseesEngine", "OpenseesSettings"]
 
 #: Import name of the OpenSeesPy interpreter module.
 _MODULE = "openseespy.opensees"
-#: Stiffness fraction of the contact dashpots' gating springs (see the module docstring).
+#: Stiffness fraction of the contact dashpots' gating springs (see the engine's page).
 _EPS_DAMP = 1e-3
 #: The line OpenSees writes to the C stderr when the interpreter exits.
 _EXIT_LINE = re.compile(rb"Process \d+ Terminating\n")
@@ -349,12 +192,12 @@ class OpenseesSettings(EngineSettings):
     damping_ratio : float
         ζ of each interface's vertical mode given by the contact dashpots
         (β = 2ζ/ω_c): the knob that sets the energy an impact removes.
-        Calibrated against Housner's η (module docstring).
+        Calibrated against Housner's η (see the engine's documentation page).
     damping_onset : float
         Compression beyond which a point's dashpot acts, as a multiple of the
         static settlement g/ω_c² (0: as soon as the point is in contact). Above
         the compression of a pivot under the weight it carries, a pivot lifts
-        off without its dashpot holding it back (module docstring).
+        off without its dashpot holding it back (see the engine's page).
     body_stiffness : float
         Stiffness of the beams that make a block rigid, as a multiple of the
         interface stiffness they connect to.
@@ -464,9 +307,23 @@ class OpenseesSettings(EngineSettings):
             raise ValueError(f"element={self.element!r} does not use {', '.join(changed)}")
 
 
+#: The most blocks the column model is built for: on taller drum columns its turning
+#: contact nodes fail the sliders' friction iteration (a 5-drum column on the tilting
+#: table: NaN at 11.35 s), while the fixed-orientation model holds (onset +2.3 %).
+COLUMN_MODEL_BLOCKS = 2
+
+
+def _column_model(scenario: Scenario) -> Column | None:
+    """The scenario's geometry as a column where the column model is built, else None."""
+    column = scenario.geometry.column
+    if column is None or scenario.n_blocks > COLUMN_MODEL_BLOCKS:
+        return None
+    return column
+
+
 def _column(scenario: Scenario) -> Column:
     """The scenario's geometry as a column (the column model is built only for one)."""
-    column = scenario.geometry.column
+    column = _column_model(scenario)
     if column is None:  # pragma: no cover - the callers are the column model's
         raise UnsupportedScenario("opensees: the column model needs blocks each on the one below")
     return column
@@ -515,7 +372,7 @@ class OpenseesEngine(Engine):
     Settings: ClassVar[type[EngineSettings]] = OpenseesSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
-        # calibrated with benchmarks/calibrate_opensees.py (figures in the module docstring)
+        # its calibration: the engine's page; reproduce with `rockbench calibrate opensees`
         "fast": {"timestep": 5e-4, "contact_frequency": 200.0},
         # the literature's Winkler bed: 10 points per interface (not Housner-calibrated)
         "winkler": {"timestep": 1e-4, "springs": 10, "contact_frequency": 500.0,
@@ -580,7 +437,7 @@ class OpenseesEngine(Engine):
                 "opensees has no restitution coefficient (impacts follow from the interface "
                 "springs and their damping); use restitution = 0"
             )
-        if scenario.geometry.column is None:  # its interfaces are the geometry's at rest
+        if _column_model(scenario) is None:  # its interfaces are the geometry's at rest
             return
         for i in range(1, scenario.n_blocks):
             lo, hi = self._span(scenario, i)
@@ -590,7 +447,8 @@ class OpenseesEngine(Engine):
     @staticmethod
     def _span(scenario: Scenario, i: int) -> tuple[float, float]:
         """x range of interface ``i`` (0: the base), between the facing pivots."""
-        blocks, off = scenario.blocks, _column(scenario).offsets
+        column = _column(scenario)
+        blocks, off = column.blocks, column.offsets
         up = (off[i] - blocks[i].pivot_half_width, off[i] + blocks[i].pivot_half_width)
         if i == 0:
             return up
@@ -616,13 +474,14 @@ class OpenseesEngine(Engine):
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
         ops = self.library(_MODULE)
-        s: OpenseesSettings = settings  # type: ignore[assignment]
+        assert isinstance(settings, OpenseesSettings)  # resolve_settings made it one
+        s = settings
         dt = float(s.timestep)
         ops.wipe()
         ops.logFile(os.devnull, "-noEcho")  # convergence retries are expected, not news
         if s.element == "rockingbc":
             return self._build_rockingbc(ops, scenario, s)
-        if scenario.geometry.column is None:
+        if _column_model(scenario) is None:
             return self._build_assembly(ops, scenario, s)
         ops.model("basic", "-ndm", 2, "-ndf", 3)
         ops.geomTransf("Corotational", 1)
@@ -891,7 +750,7 @@ class OpenseesEngine(Engine):
         self.unconverged_steps = 0
         self._x0, self._z0 = centres[:, 0].copy(), centres[:, 1].copy()
         # a geometry that is not a column: its bodies' angles at rest (a column's are 0)
-        self._a0 = geo.angles if geo.column is None else None
+        self._a0 = geo.angles if _column_model(scenario) is None else None
         self._poses = np.zeros((scenario.n_blocks, 7))
 
     def _build_rockingbc(self, ops: Any, scenario: Scenario, s: OpenseesSettings) -> float:
@@ -911,7 +770,7 @@ class OpenseesEngine(Engine):
         if mu == 0.0:  # RockingBC reads μ = 0 as "no sliding", the opposite of frictionless
             raise UnsupportedScenario("opensees element='rockingbc' cannot model a frictionless "
                                       "base (the element reads mu = 0 as no sliding)")
-        blk, g = scenario.blocks[0], scenario.g
+        blk, g = column.blocks[0], scenario.g
         (cx, cz), = column.centroids
         width = 2.0 * blk.pivot_half_width
         # E from the self-weight strain at the base: m g / (E B w) = ε0
@@ -982,11 +841,16 @@ class OpenseesEngine(Engine):
     def _set_initial_state(ops: Any, scenario: Scenario,
                            block_nodes: list[list[tuple[int, float, float]]],
                            ifaces: list[_Interface]) -> None:
-        """Displace the upright model to the initial state (module docstring)."""
+        """Displace the upright model to the initial state, so that nothing rings at t = 0.
+
+        A tilted start is the rigid rotation θ0 about the pivot (the lifted points start
+        open); an upright one is the static settlement under gravity (every interface
+        compressed uniformly by its load: exact static equilibrium).
+        """
         th = scenario.theta0
         if th != 0.0:
-            px = math.copysign(scenario.blocks[0].pivot_half_width, th) + \
-                _column(scenario).offsets[0]
+            column = _column(scenario)
+            px = math.copysign(column.blocks[0].pivot_half_width, th) + column.offsets[0]
             ct, st = math.cos(th), math.sin(th)
             for nodes in block_nodes:
                 for tag, x, z in nodes:
