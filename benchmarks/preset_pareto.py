@@ -98,7 +98,7 @@ GUARDS: dict[str, tuple[str, ...]] = {
     "pymunk": ("stack-sine-5.0hz-2mm", "stack-sine-5.0hz-4mm"),
     "dart": ("stack-sine-5.0hz-2mm", "stack-sine-5.0hz-4mm"),
 }
-#: Stack-convergence limit on the guards' worst peak error (benchmarks/stack_convergence.py).
+#: Stack-convergence limit on the guards' worst peak error (docs/engines/stack-convergence.md).
 GUARD_TOL = 0.05
 #: A candidate may be this much worse than the preset on a case.
 SLACK = 1.10
