@@ -39,9 +39,8 @@ from rockbench.report.document import (
     FigureItem,
     Section,
     cpu_model,
-    render_document_markdown,
 )
-from rockbench.report.html import render_document_html
+from rockbench.report.html import write_document
 from rockbench.report.tables import Cell, Table
 from rockbench.scenarios import Scenario
 from rockbench.studies.collapse import (
@@ -408,8 +407,5 @@ def write_assembly_report(out: Path, scenarios: Sequence[Scenario],
         "voussoir arches) in physics engines and the DEM, against the static collapse "
         "factor and mechanism of rigid-block limit analysis."], sections, CITATION)
     files.append(_write_csv(out / "results.csv", tilting, collapse))
-    md = out / "report.md"
-    md.write_text(render_document_markdown(doc), encoding="utf-8")
-    html = out / "index.html"
-    html.write_text(render_document_html(doc, out, embed=embed), encoding="utf-8")
+    html, md = write_document(doc, out, embed=embed)
     return files + [md, html]

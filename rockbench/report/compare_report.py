@@ -36,7 +36,6 @@ from rockbench.report.document import (
     Section,
     cpu_model,
     python_version,
-    render_document_markdown,
 )
 from rockbench.report.ensemble_report import predictability_section, write_ensemble_files
 from rockbench.report.figures import (
@@ -48,7 +47,7 @@ from rockbench.report.figures import (
     variations_speed_figure,
 )
 from rockbench.report.groups import group_title, scenario_group
-from rockbench.report.html import render_document_html
+from rockbench.report.html import write_document
 from rockbench.report.options import ReportOptions
 from rockbench.report.paper import citation, paper_tables
 from rockbench.report.results_csv import ResultsWriter
@@ -300,12 +299,7 @@ def _write_document(result: CompareResult, options: ReportOptions,
                 "paper's, its published values in italics. Raw numbers: results.csv (one row "
                 "per scenario × method); raw time histories: trajectories/.")],
         sections=sections, citation=citation())
-    md = out / "report.md"
-    md.write_text(render_document_markdown(doc), encoding="utf-8")
-    index = out / "index.html"
-    index.write_text(render_document_html(doc, out, embed=options.embed_figures),
-                     encoding="utf-8")
-    return [index, md]
+    return list(write_document(doc, out, embed=options.embed_figures))
 
 
 def _group_intro(group: str, scen: Sequence[Scenario]) -> str:

@@ -35,10 +35,9 @@ from rockbench.report.document import (
     Section,
     cpu_model,
     python_version,
-    render_document_markdown,
 )
 from rockbench.report.figures import method_styles
-from rockbench.report.html import render_document_html
+from rockbench.report.html import write_document
 from rockbench.report.tables import Cell, Table
 from rockbench.store import jsonable
 from rockbench.studies.fragility import FragilityResult, LimitState, LimitStateCurve
@@ -316,8 +315,5 @@ def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = Tr
                "likelihood (Baker 2015) with bootstrap intervals; each engine's median is "
                "compared with the analytic one by a paired bootstrap over the records."],
         sections=sections, citation=CITATION)
-    md = out / "report.md"
-    md.write_text(render_document_markdown(doc), encoding="utf-8")
-    index = out / "index.html"
-    index.write_text(render_document_html(doc, out, embed=embed_figures), encoding="utf-8")
+    index, md = write_document(doc, out, embed=embed_figures)
     return [index, md, *files]

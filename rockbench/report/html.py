@@ -10,7 +10,13 @@ import base64
 import html
 from pathlib import Path
 
-from rockbench.report.document import Bullets, Document, FigureItem, status_legend
+from rockbench.report.document import (
+    Bullets,
+    Document,
+    FigureItem,
+    render_document_markdown,
+    status_legend,
+)
 from rockbench.report.tables import Table, render_html
 
 __all__ = ["render_document_html", "CSS"]
@@ -143,3 +149,28 @@ def render_document_html(doc: Document, root: Path, *, embed: bool = True) -> st
                f"<a href=\"report.md\">report.md</a>.</footer>")
     out.append("</main></body></html>")
     return "\n".join(out)
+
+
+def write_document(doc: Document, out: Path, *, embed: bool = True) -> tuple[Path, Path]:
+    """Write the report as ``out/index.html`` and ``out/report.md``.
+
+    Parameters
+    ----------
+    doc : Document
+        The report.
+    out : Path
+        Its directory (created); figure paths in ``doc`` are relative to it.
+    embed : bool
+        Embed the figures in the HTML page (else link them).
+
+    Returns
+    -------
+    tuple of Path
+        The HTML page and the Markdown file.
+    """
+    out.mkdir(parents=True, exist_ok=True)
+    md = out / "report.md"
+    md.write_text(render_document_markdown(doc), encoding="utf-8")
+    index = out / "index.html"
+    index.write_text(render_document_html(doc, out, embed=embed), encoding="utf-8")
+    return index, md

@@ -28,9 +28,8 @@ from rockbench.report.document import (
     FigureItem,
     Section,
     cpu_model,
-    render_document_markdown,
 )
-from rockbench.report.html import render_document_html
+from rockbench.report.html import write_document
 from rockbench.report.options import ReportOptions
 from rockbench.report.paper import citation
 from rockbench.report.tables import Cell, Table
@@ -242,10 +241,5 @@ def write_verify_report(result: VerifyResult, options: ReportOptions) -> list[Pa
         intro=["For each method (an engine at a preset): can it be trusted on these "
                "scenarios, against which reference, and which is the cheapest that is right?"],
         sections=sections, citation=citation())
-    out.mkdir(parents=True, exist_ok=True)
-    md = out / "report.md"
-    md.write_text(render_document_markdown(doc), encoding="utf-8")
-    index = out / "index.html"
-    index.write_text(render_document_html(doc, out, embed=options.embed_figures),
-                     encoding="utf-8")
+    index, md = write_document(doc, out, embed=options.embed_figures)
     return [index, md, _write_csv(result, out / "verdict.csv")]
