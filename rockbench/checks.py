@@ -32,7 +32,8 @@ def describe(value: Any) -> str:
     if isinstance(value, (list, tuple)):
         return f"a list of {len(value)} item{'s' if len(value) != 1 else ''}"
     if isinstance(value, numbers.Integral):
-        return str(int(value)) if abs(value) < 10**20 else "an integer of 20 digits or more"
+        n = int(value)
+        return str(n) if abs(n) < 10**20 else "an integer of 20 digits or more"
     if isinstance(value, numbers.Real):
         return repr(float(value))
     return f"a {type(value).__name__}"

@@ -36,7 +36,7 @@ def zero_crossings(t: np.ndarray, theta: np.ndarray,
         for i in idx:
             if np.max(np.abs(theta[last:i + 1])) >= level:
                 keep.append(i)
-                last = i + 1
+                last = int(i) + 1
         idx = np.asarray(keep, dtype=int)
     return t[idx] - theta[idx] * (t[idx + 1] - t[idx]) / (theta[idx + 1] - theta[idx])
 

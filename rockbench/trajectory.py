@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["Status", "Trajectory", "QUANTITIES", "write_npz"]
 
@@ -55,7 +56,7 @@ def _as_2d(a: Any, n: int, name: str) -> np.ndarray:
     return arr
 
 
-@dataclass
+@dataclass(init=False)
 class Trajectory:
     """Sampled response of a block or stack.
 
@@ -93,9 +94,9 @@ class Trajectory:
 
     t: np.ndarray
     theta: np.ndarray
-    x: np.ndarray | None = None
-    z: np.ndarray | None = None
-    wobble: np.ndarray | None = None
+    x: np.ndarray
+    z: np.ndarray
+    wobble: np.ndarray
     status: Status = Status.OK
     message: str = ""
     wall_time: float = 0.0
@@ -107,18 +108,31 @@ class Trajectory:
     impacts: np.ndarray | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
-    def __post_init__(self) -> None:
-        self.t = np.asarray(self.t, dtype=float).reshape(-1)
+    # written out rather than generated: x, z and wobble may be left out (None) but are
+    # always arrays once built, and the arrays may be given as any array-like
+    def __init__(self, t: ArrayLike, theta: ArrayLike, x: ArrayLike | None = None,
+                 z: ArrayLike | None = None, wobble: ArrayLike | None = None,
+                 status: Status | str = Status.OK, message: str = "", wall_time: float = 0.0,
+                 cpu_time: float = 0.0, engine: str = "", engine_version: str = "",
+                 settings: dict[str, Any] | None = None, scenario: str = "",
+                 impacts: ArrayLike | None = None, extra: dict[str, Any] | None = None) -> None:
+        self.t = np.asarray(t, dtype=float).reshape(-1)
         n = self.t.size
-        self.theta = _as_2d(self.theta, n, "theta")
+        self.theta = _as_2d(theta, n, "theta")
         nb = self.theta.shape[1]
-        for name in ("x", "z", "wobble"):
-            val = getattr(self, name)
-            if val is None:
-                val = np.zeros((n, nb)) if name == "wobble" else np.full((n, nb), np.nan)
-            setattr(self, name, _as_2d(val, n, name))
-        self.status = Status(self.status)
-        self.impacts = None if self.impacts is None else np.asarray(self.impacts, float)
+        self.x = _as_2d(np.full((n, nb), np.nan) if x is None else x, n, "x")
+        self.z = _as_2d(np.full((n, nb), np.nan) if z is None else z, n, "z")
+        self.wobble = _as_2d(np.zeros((n, nb)) if wobble is None else wobble, n, "wobble")
+        self.status = Status(status)
+        self.message = message
+        self.wall_time = wall_time
+        self.cpu_time = cpu_time
+        self.engine = engine
+        self.engine_version = engine_version
+        self.settings = {} if settings is None else settings
+        self.scenario = scenario
+        self.impacts = None if impacts is None else np.asarray(impacts, float)
+        self.extra = {} if extra is None else extra
 
     @property
     def n_blocks(self) -> int:

@@ -37,6 +37,7 @@ from rockbench.engines.dem2d_engine import (
 )
 from rockbench.engines.drive import BaseDrive
 from rockbench.engines.settings import SettingsError
+from rockbench.geometry import Geometry, Prism
 from rockbench.metrics import impact_times
 from rockbench.scenarios import Contact, Scenario, SinePulse, Sinusoid
 from rockbench.trajectory import Status
@@ -218,6 +219,16 @@ def test_eta_below_housner_unsupported() -> None:
     assert tr.status is Status.UNSUPPORTED and "outside" in tr.message
 
 
+def test_eta_override_of_a_prism_unsupported() -> None:
+    """The η calibration is for one rectangular block: a prism is reported unsupported
+    (it raised AttributeError: a prism has no Housner η)."""
+    prism = Prism(((-0.1, -0.3), (0.1, -0.3), (0.1, 0.3), (-0.1, 0.3)), 0.2, density=2000.0)
+    geo = Geometry((prism,), ((0.0, 0.3, 0.0),), (), True)
+    tr = Dem2dEngine().simulate(Scenario("prism", geo, Contact(0.8, 0.0, eta=0.9),
+                                         duration=0.05))
+    assert tr.status is Status.UNSUPPORTED and "rectangular block" in tr.message
+
+
 # ---------------------------------------------------------------------- presets
 def test_fast_preset_close_to_accurate() -> None:
     """``fast`` within 0.005 λ of ``accurate`` on B2's free rocking and within 1 % on the
@@ -395,6 +406,7 @@ def test_a_column_takes_its_chain_any_other_geometry_its_interfaces() -> None:
 
 @pytest.mark.parametrize("check", ["assembly_rest", "assembly_penetration",
                                    "assembly_mirror_symmetry", "assembly_determinism"])
+@pytest.mark.slow
 def test_assembly_conformance(check: str) -> None:
     from rockbench.engines.testing import conformance_checks
 

@@ -16,7 +16,16 @@ from scipy.integrate import cumulative_simpson, cumulative_trapezoid
 
 from rockbench.analytic.housner import single_block_reference
 from rockbench.errors import ScenarioError
-from rockbench.scenarios import STANDARD_GRAVITY, Block, Contact, Record, Scenario, stack
+from rockbench.scenarios import (
+    STANDARD_GRAVITY,
+    Block,
+    Components,
+    Contact,
+    Record,
+    Scenario,
+    SinePulse,
+    stack,
+)
 from rockbench.scenarios import record_sets as rs
 from rockbench.scenarios.intensity import (
     IntensityMeasure,
@@ -315,3 +324,11 @@ def test_uplift_normalised_pga_is_housners_threshold(synthetic):
     assert _peak_rotation(scale_record(synthetic, "pga-uplift", 0.98, rock, g), 10.0) == 0.0
     assert _peak_rotation(scale_record(synthetic, "pga-uplift", 1.05, rock, g), 10.0) > 0.0
     assert _peak_rotation(scale_record(synthetic, "pga-uplift", 0.0, rock, g), 10.0) == 0.0
+
+
+def test_intensity_of_several_components_refused():
+    """PGA and PGV are measures of one motion along x (a Components raised AttributeError)."""
+    exc = Components(x=SinePulse(2.0, 0.01), z=SinePulse(2.0, 0.005))
+    for measure in ("pga", "pgv"):
+        with pytest.raises(ScenarioError, match="motion along x"):
+            intensity(exc, measure)

@@ -354,6 +354,12 @@ def test_scan_column_finds_islands_above_the_first_boundary(rock):
 
 
 # ---------------------------------------------------------------------- maps and CLI
+def test_parse_block_refuses_a_prism():
+    """A scenario whose first body is a prism has no block to map (it crashed later)."""
+    with pytest.raises(ScenarioError, match="not a rectangular block"):
+        parse_block("arch-9v-t0.15")
+
+
 def test_parse_block_and_grid(tmp_path):
     b = parse_block("1x5")
     assert (b.block.width, b.block.height, b.g) == (1.0, 5.0, 9.81)

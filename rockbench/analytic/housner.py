@@ -333,6 +333,7 @@ class _Solver:
 
         def impact(t: float, y: np.ndarray) -> float:
             return g_impact(t, y[0])
+        # solve_ivp reads these attributes of an event function
         impact.terminal = True  # type: ignore[attr-defined]
         impact.direction = -1  # type: ignore[attr-defined]
 

@@ -431,7 +431,10 @@ def interface_slip_bounds(scenario: Scenario) -> tuple[str, ...]:
     Checks the bounds of the module notes: the base holds the lower block, and
     neither the upper block, nor the stack, nor the loaded lower block rocks.
     """
-    lo, up = scenario.blocks
+    col = scenario.geometry.column
+    if col is None or len(col) != 2:
+        raise UnsupportedScenario("interface slip needs a stack of two blocks")
+    lo, up = col.blocks
     g, mu, mu_i = scenario.g, scenario.contact.friction, scenario.contact.block_friction
     m1, m2 = lo.m, up.m
     a = scenario.motion.peak_acceleration(scenario.duration)
@@ -444,7 +447,7 @@ def interface_slip_bounds(scenario: Scenario) -> tuple[str, ...]:
     if mu_i >= bc / h2:
         out.append(f"interface friction {mu_i:g} at or above the upper block's uplift ratio "
                    f"{bc / h2:.4g} (it could rock)")
-    lam_m = scenario.geometry.column.monolithic(g).lam  # type: ignore[union-attr]
+    lam_m = col.monolithic(g).lam
     if mu_i >= math.tan(lam_m):
         out.append(f"interface friction {mu_i:g} at or above the stack's uplift ratio "
                    f"{math.tan(lam_m):.4g} (the stuck stack could rock)")

@@ -470,7 +470,7 @@ def _non_associative(sys: _System, mu: float, x: np.ndarray
         if stationary:
             alpha_k, q = _kinematic_capped(sys, cap)
             forces = None if q is None else _consistent(sys, mu, alpha, q)
-            if forces is not None:
+            if forces is not None and q is not None:
                 return forces, alpha_k, q, k
         # the LP's forces jump between vertices of equal α: relax toward them
         normal = RELAXATION * new[:npt] + (1.0 - RELAXATION) * normal
@@ -598,6 +598,7 @@ def limit_analysis(assembly: Geometry, *, friction: float = math.inf, direction:
         alpha = math.nan if x is None else float(x[-1])
         forces = () if x is None else _forces(sys, x, n_itf)
         return LimitResult("unstable", alpha, math.nan, direction, mu, (), (), None, forces)
+    q: np.ndarray | None
     if flow == "non-associative":
         x, alpha_k, q, iterations = _non_associative(sys, mu, x)
     else:

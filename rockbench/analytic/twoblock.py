@@ -18,6 +18,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -258,6 +259,7 @@ class _Run:
         names: list[str] = []
 
         def add(fn: Callable, direction: float, name: str) -> None:
+            # solve_ivp reads these attributes of an event function
             fn.terminal = True  # type: ignore[attr-defined]
             fn.direction = direction  # type: ignore[attr-defined]
             evs.append(fn)
@@ -297,13 +299,13 @@ class _Run:
         if p.kind == "M":
             a = self.a(t)
             lam = {sg: m.lambda_if(p.base, sg, z[0], z[2], a) for sg in (1, -1)}
-            sg = min(lam, key=lam.get)  # type: ignore[arg-type]
+            sg = min(lam, key=lam.__getitem__)
             if lam[sg] < 0:
                 return Pattern(p.base, sg)
         elif p.kind == "U":
             a = self.a(t)
             lam = {sg: m.lambda_b(p.iface, sg, z[1], z[3], a) for sg in (1, -1)}
-            sg = min(lam, key=lam.get)  # type: ignore[arg-type]
+            sg = min(lam, key=lam.__getitem__)
             if lam[sg] < 0:
                 return Pattern(sg, p.iface)
         return p
@@ -353,9 +355,9 @@ class _Run:
                     return out
 
                 self.fill(t, self.t_final if tn is None else tn, rest, last, p)
-                if last:
+                if tn is None or last:
                     return
-                t = float(tn)  # type: ignore[arg-type]
+                t = float(tn)
                 a0 = self.a(t)
                 a1 = self.a(t + 1e-9 * max(1.0, t))
                 ap = a1 if abs(a1) > abs(a0) or a0 * a1 < 0 else a0
@@ -383,7 +385,7 @@ class _Run:
                 self.message = f"integration failed at t={t:.6g} s: {sol.message}"
                 return
             t_end = float(sol.t[-1])
-            self.fill(t, t_end, lambda ts, s=sol: s.sol(ts).T, t_end >= self.t_final, p)
+            self.fill(t, t_end, partial(_dense_states, sol), t_end >= self.t_final, p)
             stall = stall + 1 if t_end <= t else 0
             if stall > 100:
                 self.status = "incomplete"
@@ -418,6 +420,11 @@ class _Run:
                 sg = int(arg)
                 p = Pattern(p.base, sg) if p.kind == "M" else Pattern(sg, p.iface)
             # "arm": nothing to do; the next phase sees an armed gap
+
+
+def _dense_states(sol: Any, ts: np.ndarray) -> np.ndarray:
+    """An ODE solution's dense output at the times ``ts``, one row of states per time."""
+    return sol.sol(ts).T
 
 
 def _initial_pattern(theta0: tuple[float, float], omega0: tuple[float, float]) -> Pattern:

@@ -24,9 +24,12 @@ import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from rockbench.geometry import Block
 
 __all__ = ["BlockParams", "Pattern", "TwoBlockModel", "parse_pattern"]
 
@@ -67,13 +70,13 @@ class BlockParams:
         return cls(b, h, m, m * (b * b + h * h) / 3.0)
 
     @classmethod
-    def from_block(cls, block: object) -> BlockParams:
+    def from_block(cls, block: Block) -> BlockParams:
         """Parameters of a :class:`rockbench.scenarios.Block` (pivots at the chamfer corners)."""
         return cls(
-            float(block.pivot_half_width),  # type: ignore[attr-defined]
-            float(block.h),  # type: ignore[attr-defined]
-            float(block.m),  # type: ignore[attr-defined]
-            float(block.inertia[1]),  # type: ignore[attr-defined]
+            float(block.pivot_half_width),
+            float(block.h),
+            float(block.m),
+            float(block.inertia[1]),
         )
 
 
@@ -328,7 +331,8 @@ class TwoBlockModel:
         c1, n1, c2, n2 = np.cos(th1), np.sin(th1), np.cos(th2), np.sin(th2)
         ox = s1 * self.b1
 
-        def rot(vx: np.ndarray, vy: np.ndarray, c: np.ndarray, n: np.ndarray) -> tuple:
+        def rot(vx: np.ndarray, vy: np.ndarray | float, c: np.ndarray,
+                n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             return vx * c + vy * n, -vx * n + vy * c
 
         ex, ey = rot(-s1 * self.b1, self.h1, c1, n1)

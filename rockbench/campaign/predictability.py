@@ -36,6 +36,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -145,7 +146,8 @@ class Predictability:
 
 
 def _perturb_amplitude(scenario: Scenario, rel: float) -> Scenario:
-    exc = scenario.excitation
+    # any kind of excitation: its amplitude field, where it has one, is found by name
+    exc: Any = scenario.excitation
     names = {f.name for f in dataclasses.fields(exc)} if dataclasses.is_dataclass(exc) else set()
     for name in ("amplitude", "scale"):
         if name in names:

@@ -4,6 +4,9 @@ A thin adapter so that the CLI, the report and the matrix treat the reference
 like any engine. It replaces the time-stepping loop (``Engine._run``) by the
 reference solution; :meth:`~rockbench.engines.Engine.simulate` still resolves
 the settings, refuses unsupported scenarios and times the run.
+
+See :doc:`the engine's page </engines/analytic>` in the documentation for the
+models it picks and their cost.
 """
 
 from __future__ import annotations
@@ -61,7 +64,8 @@ class AnalyticEngine(Engine):
             raise UnsupportedScenario(why)
 
     def _run(self, scenario: Scenario, settings: EngineSettings, meta: dict) -> Trajectory:
-        traj = analytic.reference(scenario, linear=settings.linear)  # type: ignore[attr-defined]
+        assert isinstance(settings, AnalyticSettings)  # resolve_settings made it one
+        traj = analytic.reference(scenario, linear=settings.linear)
         traj.engine, traj.engine_version = meta["engine"], meta["engine_version"]
         traj.settings = {**traj.settings, **meta["settings"]}
         return traj

@@ -1,145 +1,43 @@
 """Blender engine plugin: Bullet inside Blender through ``bpy``, the paper's own tool.
 
-Scene (built in an empty factory scene, ``bpy.ops.wm.read_factory_settings(use_empty=True)``,
-on every build and again at teardown, since ``bpy`` is one global Blender session):
-one mesh object per block (the block's prism; collision shape box, convex hull or
-triangle mesh), an ACTIVE rigid body with the block's mass; a box base whose top face
-is z = 0, a PASSIVE rigid body, ``kinematic`` ("animated") when the base moves. Every
-rigid-body property Blender would default is set explicitly (Blender's own defaults
-are not zero: linear/angular damping 0.04/0.1, friction 0.5, margin 0.04, see
-:data:`BLENDER_DEFAULTS`). Deactivation (sleeping) is off.
+Every build starts from an empty factory scene (``bpy`` is one global Blender session;
+a worker not on the thread that imported ``bpy`` empties it through the data API). Each
+block is a mesh object with an ACTIVE rigid body of the block's mass and a ``box``,
+``convex`` (hull) or ``mesh`` collision shape (``collision_shape``); the base is a
+PASSIVE box whose top face is z = 0, kinematic ("animated") when it moves. Every
+rigid-body property Blender would default (:data:`BLENDER_DEFAULTS`: damping, friction,
+margin) is set explicitly, and deactivation is off. Bullet multiplies the two bodies'
+friction and restitution, so each body gets a coefficient such that every pair's
+product is the scenario's (:func:`~rockbench.engines.friction.product_frictions`).
 
-What Blender really does (measured with bpy 5.0.1, see tests/test_engine_blender.py):
+Time stepping is Blender's: each frame of 1/``fps`` s is split into
+``substeps_per_frame`` Bullet steps, Δt = 1 / (fps · n_s), and the simulation advances
+only when the scene moves to the next frame, so the base class sees one frame as its
+step. The base is placed at the exact u_g of every frame and Blender interpolates it
+linearly in between, so its velocity is the frame's secant (``drive`` selects a motor
+constraint instead). The base motion is applied along x only. A base that travels
+without bound (a :class:`~rockbench.scenarios.TiltTable`'s ramp) is kept still and
+gravity is tilted by −ü_g instead: single-precision Bullet cannot follow a base tens of
+metres away.
 
-* **Time step.** Each frame of 1/FPS s is split into ``substeps_per_frame`` Bullet steps
-  of equal length: Δt = 1 / (FPS · n_s). This is Blender ≥ 2.91's rule; the paper's
-  Δt = 1 / ((n_s + 1) · FPS) is *not* what Blender 5.0 does (free fall over one frame
-  drops g T² (N + 1) / (2N) with N = n_s exactly). FPS = ``render.fps / render.fps_base``
-  (both set from the ``fps`` knob, which may be fractional).
-* **Advancing.** Blender steps the simulation only when the scene moves to the next
-  frame (``scene.frame_set(f + 1)``); the point cache's ``frame_end`` bounds the run and
-  is set to cover it. The base class therefore sees one *frame* as its step: ``_build``
-  returns the frame's length and ``_advance(n)`` moves n frames. A frame of the ``fps``
-  knob that fits the output interval is one Blender frame of n_s sub-steps (if it does not
-  divide the interval, the base class reads every frame and interpolates onto the output
-  clock). A longer one (the paper's 240 fps against 1 kHz output) is run as n_s Blender
-  frames of one sub-step at fps · n_s, the base placed at the targets Blender would give
-  it at each sub-step (linear between the knob's frames), sampled at the physics step,
-  which the base class requires to fit the output interval. Free rocking is then
-  bit-identical at the knob's frames (tested); under a moving base the split run's base
-  moves exactly along the secants while an unsplit frame leaves its sub-step targets to
-  Blender (measured on Single #2 at 240 fps × 20: peaks 0.9999 and 0.9960 of Housner's,
-  trajectories 0.015 λ apart).
-* **Kinematic base.** Blender hands Bullet the animated (kinematic) object's transform
-  interpolated linearly between the previous and the current frame at every sub-step,
-  and Bullet gives a kinematic body the velocity of its transform change. Setting the
-  base location to the exact u_g(t_f) at every frame therefore gives the base the
-  secant velocity (u_g(t_f) − u_g(t_{f−1})) · FPS for the whole frame: displacement
-  exact at every frame, velocity its frame average. This is the paper's drive
-  ("animated" passive body from the displacement), with the displacement sampled at
-  every frame rather than keyframed with Blender's default Bézier interpolation.
-  Blender exposes no velocity of a rigid body to Python, so the only other drive is a
-  motor constraint (see the ``drive`` knob).
-* **Friction and restitution.** Bullet multiplies the two bodies' coefficients, so each
-  body gets the square root of the scenario's (or the knob's) value.
-* **Shapes and margins.** ``box`` uses Bullet's box–box detector (exact corners whatever
-  the margin). ``convex`` is a convex hull of the block's prism; without ``use_margin``
-  Blender shrinks it by a 0.04 m margin and rounds it back out by the same radius, which
-  moves the rocking pivots; with ``use_margin`` the given ``collision_margin`` is used.
-  ``mesh`` is Blender's triangle-mesh shape (GImpact for active bodies). With
-  ``use_margin``, Bullet inflates hulls and meshes by the margin: the prism is shrunk
-  by it so that the block keeps its faces (a 1 mm margin on the uncut prism lifted B0
-  at release: an energy gain the watchdog caught). Blender
-  computes inertia from the collision shape: for hulls and meshes Bullet uses the
-  shape's bounding box, i.e. the uncut box's inertia the analytic models also use.
-* **Split impulse** changes nothing measurable here (bit-identical runs): Bullet uses it
-  only for penetrations deeper than its threshold (−0.04 m), which rocking never reaches.
-* **Pivot creep; the planar constraint.** A free block's sticking pivot creeps in
-  Blender's Bullet: B0 released at 0.5 λ slides its pivot corner +166 µm outward before
-  its first impact at Δt 0.1 ms (1.9 mm at 1 ms, 17 µm at 0.01 ms: ∝ Δt), whatever the
-  friction (1 or 100), iterations (10–200), shape (box or hull) or margin, and twists
-  out of plane (wobble 0.07 rad after 10 s). Each half cycle then loses 0.2–0.5 % more
-  amplitude than Housner's η gives, and impacts come early (1 % by the 11th); this was
-  the 0.08 λ of B0. Bullet gives each contact point one friction direction, along the
-  slip velocity before the solve, which at a sticking pivot is solver noise with
-  out-of-plane parts: likely some steps leave the in-plane slip unresisted (pybullet
-  with Blender's solver settings creeps 0–10 µm). A GENERIC rigid body constraint from
-  the base to each block locking y, roll and yaw (``planar``, on in ``accurate`` and
-  ``fast``) removes it: creep 11 µm, no wobble, B0 0.020–0.022 λ over 20 s (Housner's
-  η to 0.01 % at the first six impacts).
-* **Contact breaking threshold: the remaining floor.** Held in the plane, B0 loses
-  about 0.1 % more than η per impact once its amplitude is below 0.25 λ (from the 6th
-  impact), where the lifted corner stays within Bullet's contact breaking threshold
-  (0.02 × the block's bounding radius, 5.1 cm on B0) and its points stay in the contact
-  manifold. Blender exposes no such setting; writing 1e-4 into Bullet's global
-  (``benchmarks/calibrate_blender.py --bullet-breaking-threshold 1e-4``, a diagnostic)
-  brings B0 to 0.005 λ, while time step (0.05 ms), iterations (20–100) and split
-  impulse leave it at 0.020–0.022 λ.
-* **Depsgraph order.** With the base location only set from Python (or keyframed),
-  Blender sometimes stepped the simulation before evaluating the base's new transform
-  (two outcomes 8e-4 rad apart on a pulse, run to run); the view layer is therefore
-  updated after each placement, which makes driven runs bit-identical.
-* **Threads.** Blender loads files (``read_factory_settings`` too) only on the thread
-  that imported bpy; a worker forked from another thread (the runner's process pool)
-  crashes there, so it empties the scene through the data API (same trajectories to the
-  bit), and every operator gets its context explicitly.
-* Blender's matrices are float32: poses carry ~1e-7 relative rounding.
-* **Geometries** (:class:`~rockbench.geometry.Geometry`) of rectangular blocks:
-  each block a box (a hull when chamfered) at its pose, held in the plane like a single
-  block; a fixed support a PASSIVE box (any other convex polygon a hull shrunk by the
-  margin), twice the deepest block in depth, placed with the base every frame. Each body's
-  friction is chosen so that every pair's product is the scenario's
-  (:func:`~rockbench.engines.friction.product_frictions`): √μ on every body when μ_if = μ;
-  on a column the base μ and the blocks alternating 1 and μ_if; otherwise every block
-  √μ_if and the base and supports μ / √μ_if (before, every body got √μ and an interface
-  of μ_if = 0.05 on a base of 0.25 carried 0.25; the upper block rocked to 0.12 λ instead of
-  sliding; now within 0.3 % of the exact slip). Convex polygonal prisms are unsupported:
-  Bullet computes a hull's inertia from its bounding box (+16 to +70 % about y on the
-  voussoirs of arch-9v-t0.15) and bpy has no inertia to set, and hulls not symmetric about
-  their centroid explode in the first step (a trapezoid 20 m/s, a voussoir 250 m/s;
-  symmetric hulls, chamfered blocks, do not). Measured at rest over 0.5 s: column,
-  parapet and 6 × 3 wall ≤ 9e-7 λ, ≤ 5.3e-6 m; a block on a support rides it to 1e-3.
-* **Tilting table in the base's frame.** A base whose travel has no bound (a
-  :class:`~rockbench.scenarios.TiltTable`'s ramp, the only such motion; the plugin tells it
-  from the drive alone, see :func:`_runs_away`) reaches tens of metres at metres per
-  second; in Blender's single-precision Bullet the 5-drum column's bottom drum then
-  slipped 10 mm behind its base by α = 0.24 (at 0.025/s) and the column moved at 0.183
-  (−24 % of the LP). The plugin therefore keeps the base
-  still and tilts the scene's gravity by −ü_g each frame (mid-frame value, exact for a
-  translating base), adding u_g to the x it reads: B2 lifts within 2e-5 λ of Housner's
-  reference, the parapet and the column move at +2.8 % and +1.6 % of the LP (0.025/s).
-  The drums still creep on each other (2 mm by α = 0.24, Bullet's friction under a
-  sustained shear), and the 6 × 3 wall moves at 0.34–0.41 (−41 %) with 15 bricks,
-  not the LP's wedge of nine.
+Presets and knobs:
 
-Calibration (``rockbench compare --suite paper-free`` / ``paper-single-pulse`` and
-``benchmarks/calibrate_blender.py``, bpy 5.0.1): ``accurate`` (Δt 0.1 ms, 20 iterations,
-planar) max |θ − θ_ref| ≤ 0.022 λ on B0–B3 over 20 s (B0 0.022, B1–B3 ≤ 0.0017), the
-first three impacts within 0.06 %, pulse peaks −0.14 to +0.68 %; free in 3D (``planar``
-off) the same step gave 0.080 λ (B0; B1–B3 ≤ 0.035) and impacts up to 2.5 % off.
-``fast`` (Δt 1 ms, planar) ≤ 0.087 λ (B0; B1–B3 ≤ 0.013), impacts within 0.53 %, pulse
-peaks −1.3 to +1.1 % (free: 0.24 λ, 22 %, −3.2 %). ``paper`` (Δt 0.21 ms, free) ≤ 0.10 λ,
-impacts up to 8 %, pulse peaks −0.65 to −0.37 %. The project's free-rocking target
-(0.005 λ) is met on B1–B3; B0 stays at 0.020–0.022 λ whatever the step (0.05 ms),
-iterations or split impulse: Bullet's contact breaking threshold (above), out of
-Blender's reach. Results remain irregular in the knobs at the 0.5 % level (50 instead
-of 20 iterations moved one mirrored pulse peak by 0.6 %).
-The paper's two-block stack under the eight pulses (``paper-stack-pulse``, accurate):
-peaks of both blocks −5.9 to +6.0 % of the two-block reference (+6.0 % at 3.3 Hz/4 mm, an
-uplift ratio of 1.12; −5.9 % on the top block at 6.5 Hz/2 mm); free in 3D −14 to +5 %
-(at 50 iterations −24 to +4 %).
+* ``accurate`` (the defaults): 1000 fps × 10 sub-steps (Δt 0.1 ms), 20 iterations,
+  ``planar``: each block held in the x–z plane by a rigid body constraint from the
+  base, which removes the pivot creep and out-of-plane wobble of free blocks.
+* ``fast``: Δt 1 ms (one sub-step per frame), 50 iterations, ``planar``.
+* ``paper``: the paper's set-up (240 fps × 20 sub-steps, 100 iterations, box shapes,
+  1e-5 m margin, split impulse off, free blocks); the ``paper-sensitivity`` suite
+  varies it.
+* The paper's Table 2 knobs: ``fps``, ``substeps_per_frame``, ``solver_iterations``,
+  ``collision_shape``, ``collision_margin`` (with ``use_margin``).
 
-The paper's Table 2 study (``rockbench compare --suite paper-sensitivity``, B0) varies
-the ``paper`` preset (``sensitivity_preset``: 240 fps, 20 sub-steps, 100 iterations, split
-impulse off as in Blender, free blocks) unless ``--presets`` names another. Measured
-(session 4): iterations 10/100/1000 and margins 1e-3/1e-5/1e-6 m barely matter (0.10–0.13
-λ; margins bit-identical with box shapes), a mesh dissipates far too little (0.65 λ, still
-rocking at 20 s), sub-steps and rate matter most: the baseline stops B0 at 15.3 s (Housner:
-16.5 s to |θ| < 0.01 λ), 2 sub-steps at 5.3 s, 200 at 16.0 s; 10 fps at 8.0 s, 50 fps at
-12.7 s. The paper saw 2 sub-steps stop it at 10–11 s; with split impulse on (and 50
-iterations) 2 sub-steps at 240 fps stop it at 10.4 s. Held in the plane (from ``accurate``)
-the same variations stop it at 9.9 s: part of what the paper attributed to sub-steps is the
-pivot creep, which grows with the step.
+Known limits: Bullet's contact breaking threshold, which Blender does not expose, keeps
+a lifted corner in contact late in free rocking (the slender B0 is the least accurate);
+convex polygonal prisms are unsupported (bpy sets no inertia); poses are float32.
+
+See :doc:`the engine's page </engines/blender>` in the documentation for its
+calibration, measured accuracy and cost.
 """
 
 from __future__ import annotations
@@ -235,7 +133,7 @@ class BlenderSettings(EngineSettings):
         from the base to the block, collisions kept): y translation, roll and yaw
         locked, x, z and the rocking angle free. Without it Bullet's contact friction
         lets the sticking pivot creep and the block twist out of plane, the main error
-        of free rocking (see the module docstring). The paper's blocks were free (False).
+        of free rocking (see the engine's documentation page). The paper's blocks were free (False).
     """
 
     fps: float = 1000.0
@@ -310,7 +208,7 @@ class BlenderEngine(Engine):
         # Δt 0.1 ms (1000 fps × 10 sub-steps), 20 iterations, blocks held in the rocking
         # plane (50 iterations: as accurate on free rocking, but one of the mirrored
         # 3 Hz/8 mm pulses rocks 0.6 % higher, 0.014 λ apart; 20: 0.0004 λ):
-        # calibration in benchmarks/calibrate_blender.py
+        # calibration on the engine's page (`rockbench calibrate blender`)
         "accurate": {},
         # Δt 1 ms, one step per frame, 50 iterations, planar
         "fast": {"fps": 1000.0, "substeps_per_frame": 1, "solver_iterations": 50},
@@ -381,12 +279,13 @@ class BlenderEngine(Engine):
                 "frictionless block-block joints with friction on the base cannot both hold")
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
-        s: BlenderSettings = settings  # type: ignore[assignment]
+        assert isinstance(settings, BlenderSettings)  # resolve_settings made it one
+        s = settings
         if s.collision_shape == "mesh" and scenario.n_blocks > 1:
             raise UnsupportedScenario("blender: collision_shape='mesh' models single blocks "
                                       "only (two concave meshes do not collide in Bullet)")
         # a frame longer than the output interval is run as n_s frames of one sub-step
-        # each (same Bullet steps, same kinematic targets: see the module docstring)
+        # each (same Bullet steps, same kinematic targets: bit-identical at the knob's frames)
         split = 1.0 / s.fps > (1.0 + 1e-9) / scenario.output_rate
         fps = s.fps * s.substeps_per_frame if split else s.fps
         substeps = 1 if split else s.substeps_per_frame
@@ -499,7 +398,8 @@ class BlenderEngine(Engine):
         # the frame ending at t + dt: the base is there when Blender steps into it
         i = min(int(round(t / dt)) + 1, len(self._u) - 1)
         if self._motor is None:
-            # evaluated now, before the frame step reads it (see the module docstring)
+            # evaluated now, before the frame step reads it (Blender sometimes stepped before
+            # evaluating the base's new transform, and runs did not repeat)
             self._place_base(self._u[i])
         else:
             # a positive target velocity moves object2 (the base) toward −x (measured)
@@ -627,7 +527,8 @@ def _prism(bpy: Any, scene: Any, name: str, profile: np.ndarray, half_depth: flo
     k = len(profile)
     verts = [(float(x), y, float(z)) for x, z in profile for y in (-half_depth, half_depth)]
     # side quads (outward for a counter-clockwise profile) and the two caps
-    faces = [(2 * j, 2 * ((j + 1) % k), 2 * ((j + 1) % k) + 1, 2 * j + 1) for j in range(k)]
+    faces: list[tuple[int, ...]] = [(2 * j, 2 * ((j + 1) % k), 2 * ((j + 1) % k) + 1, 2 * j + 1)
+                                    for j in range(k)]
     faces += [tuple(2 * j for j in range(k)), tuple(2 * j + 1 for j in reversed(range(k)))]
     mesh = bpy.data.meshes.new(name)
     mesh.from_pydata(verts, [], faces)

@@ -1,51 +1,36 @@
-"""pybullet (Bullet 3) engine plugin.
+"""pybullet (Bullet 3) engine plugin: rigid blocks in 3D, in maximal coordinates.
 
-Scene: one collision shape per block (box, convex hull of the block's prism, or a
-concave triangle mesh), a box ground whose top face is z = 0, every body with zero
-damping, sleeping disabled and friction/restitution such that Bullet's *products*
-of the two bodies' coefficients equal the scenario's values. Each run owns a
-DIRECT-mode client (``pybullet.connect(pybullet.DIRECT)``), disconnected in
-``_teardown``.
+Each run owns a DIRECT-mode pybullet client, disconnected at teardown. Each block is
+a rigid body with the block's mass and principal inertia (a convex prism's body frame
+is its principal frame, turned back when its pose is read) and one collision shape: a
+box, the convex hull of its prism or a concave triangle mesh (``collision_shape``); a
+chamfered block is a box spanning its flat faces or its hull (``chamfer_shape``). The
+ground is a box whose top face is z = 0: a static body in free rocking, and under a
+moving base a fixed-base multibody whose velocity is prescribed every step (Bullet
+ignores a static body's velocity, which would then not drag a block through
+friction). Fixed supports are bodies of the ground's kind. No damping, no sleeping.
+Bullet multiplies the friction and restitution of the two bodies in contact, so each
+body gets coefficients whose products are the scenario's
+(:func:`~rockbench.engines.friction.product_frictions`). The base motion is applied
+along x only.
 
-Geometries (:class:`~rockbench.geometry.Geometry`): rectangular blocks are boxes,
-convex prisms convex hulls (shrunk by the collision margin, like chamfered
-blocks), each at its pose; a fixed support is one more body of the ground's kind
-(static, or a fixed-base multibody driven with the ground's velocity), a box when it
-is an axis-aligned rectangle, else a hull, twice the deepest block in depth. A
-prism's x–z product of inertia is not zero, and Bullet takes principal moments
-only: its body frame is the principal frame, turned by φ about y from the block's,
-and the poses read back are turned by −φ. Frictions:
-:func:`~rockbench.engines.friction.product_frictions` (a column alternates 1 and
-μ_if on its blocks; any other geometry, whose blocks touch blocks and the base at
-once, gets sqrt(μ_if) on every block and μ / sqrt(μ_if) on the ground and
-supports, so that each pair's product is the scenario's). Measured (issue 18,
-accurate preset): the box assemblies rest to < 2e-5 λ; on the tilting table the
-parapet, the 5-drum column and the t/R = 0.2 arch move at +2.0 %, +2.1 % and
-+0.04 % of the LP factor (the arch with its springer on the far side moving too);
-the thin t/R = 0.15 arch settles on its hull joints and moves 4.5 % early, not
-quasi-statically.
+Presets and knobs:
 
-Measured pitfalls this module works around (see docs/engine-notes.md):
+* ``accurate`` (the defaults): Δt = 1 / ((``substeps`` + 1) · ``fps``) = 0.1 ms, 50
+  solver iterations all run (``solver_residual_threshold`` 1e-12), a contact breaking
+  threshold of 1e-4 m (Bullet's 0.02 m keeps a lifted pivot in contact) and no contact
+  slop.
+* ``fast``: Δt 1 ms, hulls for chamfered blocks, breaking threshold 1e-3 m, Bullet's
+  early exit of the solver.
+* The paper's Table 2 knobs (``fps``, ``substeps``, ``solver_iterations``,
+  ``collision_shape``, ``collision_margin``); an explicit ``timestep`` overrides
+  ``fps`` and ``substeps``.
 
-* Bullet combines friction and restitution of two bodies as a product, so each
-  body gets sqrt(μ) and sqrt(e) (with an interface friction: see
-  :func:`rockbench.engines.friction.product_frictions`).
-* Default linear/angular damping is 0.04: set to 0.
-* ``contactBreakingThreshold`` (default 0.02 m) keeps the lifted pivot's contact
-  points in the manifold while the edge is less than 2 cm above the ground; this
-  perturbs every rocking cycle (0.02–0.1 λ error on B0; 1e-4 m is the default
-  here). It is a *process-global*
-  variable in Bullet, so it is set on every build. ``contactSlop`` (default
-  1e-3 m) lets contacts sink; 0 is far more accurate.
-* A mass-0 body in maximal coordinates is a static btRigidBody: the solver ignores
-  its velocity, so friction would not drag a block. A moving base is therefore a
-  fixed-base btMultiBody (mass 0) whose base velocity is prescribed every step;
-  Bullet uses that velocity in the contact constraints and integrates its position.
-* ``changeDynamics(localInertiaDiagonal=...)`` on a maximal-coordinate body resets
-  its mass to 0 unless the mass is passed in the same call.
-* ``setPhysicsEngineParameter(numSubSteps=n, fixedTimeStep=n·dt)`` makes one
-  ``stepSimulation`` call advance n internal steps of dt (bit-identical to n
-  separate calls), which removes the Python overhead in free rocking.
+Known limits: the paper stack's 4 mm sinusoid does not converge as the step shrinks; a
+concave mesh collides with convex shapes only, so ``"mesh"`` supports single blocks.
+
+See :doc:`the engine's page </engines/bullet>` in the documentation for its
+calibration, measured accuracy and cost.
 """
 
 from __future__ import annotations
@@ -127,7 +112,7 @@ class BulletSettings(EngineSettings):
         Separating-axis test for convex hulls (full contact manifolds).
     contact_breaking_threshold : float
         Distance (m) beyond which manifold points are dropped (Bullet default
-        0.02; 1e-3 is far more accurate for rocking, see the module docstring;
+        0.02; 1e-3 is far more accurate for rocking, see the engine's page;
         1e-4 for the paper stack, whose lifted upper block otherwise keeps stale
         points on the lower one: stack pulses 7.7 % off at 1e-3 with the narrow
         box, 0.85 % at 1e-4).
@@ -216,7 +201,7 @@ class BulletEngine(Engine):
         # 0.1 ms steps (fps 1000 × 10 sub-steps), every solver pass run: ≤ 5e-3 λ on the
         # free-rocking catalog; the paper stack within 0.38 % on its pulses, interface slip
         # 9e-6 m, Coulomb sliding within 0.4 % (1e-7: 0.85 %, 1e-4 m, 2.5 %) at 3.5× the
-        # cost on stacks (benchmarks/stack_convergence.py, tests/test_sliding_engines.py)
+        # cost on stacks (docs/engines/stack-convergence.md, tests/test_sliding_engines.py)
         "accurate": {},
         # 1 ms steps, no sub-steps: ≤ 0.05 λ at ~10× less cost (calibrated with the hull,
         # the 1 mm breaking threshold and Bullet's early exit, kept: running every pass
@@ -273,7 +258,8 @@ class BulletEngine(Engine):
                 "geometry whose blocks touch each other and the base (not a column)")
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
-        s: BulletSettings = settings  # type: ignore[assignment]
+        assert isinstance(settings, BulletSettings)  # resolve_settings made it one
+        s = settings
         if s.collision_shape == "mesh" and scenario.n_blocks > 1:
             # settings are not visible to _check_supported, hence here
             raise UnsupportedScenario(

@@ -1,46 +1,34 @@
 """``--engine dart``: DART (Dynamic Animation and Robotics Toolkit) through ``dartpy``.
 
-Scene: one :class:`~dartpy.dynamics.Skeleton` per block with a ``FreeJoint``, a
-box shape (for a chamfered block, by default the box spanned by the chamfered
-prism's flat faces, or the prism itself from :meth:`Block.profile` as a triangle
-mesh: see ``DartSettings.chamfer_shape``), explicit mass and centroidal inertia;
-the base is a box skeleton (top face z = 0) on a ``PrismaticJoint`` along x whose
-``VELOCITY`` actuator is commanded every step with the secant velocity of the
-excitation, so the base position follows u_g(t) exactly at the
-step nodes (``Capabilities.base_axes`` "x": the x component of the base motion).
-DART's time stepping is velocity based (semi-implicit Euler with an
-LCP for contacts and friction); restitution and friction are per ``ShapeNode``.
+DART steps velocity-based (semi-implicit Euler), with a linear complementarity problem
+(``lcp_solver``, Dantzig by default) for contacts and friction. Each block is a
+``Skeleton`` on a ``FreeJoint`` with the block's mass and full inertia tensor and one
+shape: a box, or a triangle mesh of the prism for a convex prism (a chamfered block: by
+default the box spanned by its flat faces, or its prism mesh, ``chamfer_shape``). The
+base is a box skeleton (top face z = 0) on a ``PrismaticJoint`` along x whose
+``VELOCITY`` actuator is commanded every step with the secant velocity of the base
+motion, so that its position follows u_g(t) exactly at the step nodes; fixed supports
+are more shapes of the base body. The base motion is applied along x only. Sleeping
+is switched off. DART multiplies the restitutions of a pair, so each body gets sqrt(e)
+(``restitution_mode``), and gives a pair the smaller of its two friction coefficients:
+a column's bottom block gets max(μ, μ_if) and the others μ_if (exact for any μ, μ_if);
+any other geometry gives every block μ_if and the base μ, exact when μ_if ≥ μ.
 
-Any :class:`~rockbench.geometry.Geometry`: rectangular blocks are boxes and convex
-prisms triangle meshes of the prism (as for chamfered blocks with
-``chamfer_shape="mesh"``), each at its pose with its full inertia tensor (a
-polygon's x–z product of inertia is not zero); fixed supports are more shapes of the
-base body (a box for an axis-aligned rectangle, else a prism mesh, twice the deepest
-block in depth). DART gives a pair the smaller of its two friction coefficients.
-A column (:attr:`~rockbench.geometry.Geometry.column`: each block on the one below)
-gives the bottom block max(μ, μ_if) and the others μ_if, exact for any μ, μ_if; any
-other geometry gives every block μ_if and the base μ, which is exact when μ_if ≥ μ;
-with μ_if < μ it is unsupported (its blocks may touch each other and the base at once).
-Measured (issue 18): the box assemblies rest to < 1e-4 λ at every preset and open the
-LP mechanism on the tilting table within +2.3 % (column) and +3.2 % (parapet) of its
-factor at the fast preset; the 9-voussoir arch rests to 3e-7 λ with FCL meshes
-(accurate, 41 s CPU per simulated second; single 11 s) but is unstable with ODE's
-meshes (fast), and on the tilting table at the single preset its voussoirs slide on
-the mesh joints from α = 0.14 (LP 0.298). Walls cost the contact LCP: 138 (6 × 3)
-and 1200 (10 × 3) s CPU per simulated second at the single preset.
+Presets and knobs:
 
-Measured pitfalls that this adapter avoids (docs/engine-notes.md): a
-``PlaneShape`` ground with FCL gives a single contact point (use a box);
-deactivation (sleeping) is on by default (switched off); the restitution of the
-two bodies in a contact multiplies (``restitution_mode``); ``World.step``
-resets actuator commands after each step by default (the base then stands still
-with a zero velocity command, which is exactly what is wanted once the
-excitation has ended).
+* ``accurate``: Δt 0.025 ms with the FCL collision detector (the step at which the
+  paper's stack converges).
+* ``single``: Δt 0.1 ms with FCL, enough for single blocks and stack pulses.
+* ``fast``: Δt 1 ms with ODE's detector; the assembly studies' preset.
+* ``timestep``, ``collision_detector``, ``lcp_solver``, ``split_impulse``,
+  ``restitution_mode``, ``chamfer_shape``, ``base_drive``.
 
-Step (``benchmarks/stack_convergence.py``): 0.1 ms is enough for single blocks and
-the stack pulses (≤ 0.44 %), but the well-posed stack sinusoids converge only
-below it: 5 Hz / 4 mm is 36 % low at 0.1 ms, 6 % at 0.05 ms, within 4 % at
-0.025 ms and 2.3 % at 0.01 ms. ``accurate`` is 0.025 ms; ``single`` keeps 0.1 ms.
+Known limits: arches are unstable with ODE's meshes (``fast``); walls are costly (the
+contact LCP grows with the bricks); an interface friction below the base's is
+unsupported on assemblies.
+
+See :doc:`the engine's page </engines/dart>` in the documentation for its
+calibration, measured accuracy and cost.
 """
 
 from __future__ import annotations
@@ -222,7 +210,8 @@ class DartEngine(Engine):
                 "whose blocks may touch each other and the base")
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
-        s: DartSettings = settings  # type: ignore[assignment]
+        assert isinstance(settings, DartSettings)  # resolve_settings made it one
+        s = settings
         chamfered = any(b.chamfer > 0 for b in scenario.blocks)
         use_mesh = chamfered and s.chamfer_shape == "mesh"
         if use_mesh and s.collision_detector == "dart":

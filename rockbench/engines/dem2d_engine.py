@@ -1,170 +1,43 @@
 """dem2d engine plugin: a calibrated Distinct Element Method for planar rigid blocks.
 
 The paper's DEM column comes from 3DEC, which has no open equivalent; this is
-our own two-dimensional DEM with the same ingredients (paper-brief.md, "DEM"):
-rigid convex blocks (rectangles, or octagons when chamfered) in the x–z plane;
-soft contacts between facing block edges, each discretised into ``subcontacts``
-points with normal and shear springs per unit area (k_n, k_s) over their
-tributary areas; zero tension; Mohr–Coulomb slip with the scenario's friction
-(``interface_friction`` between blocks); stiffness-proportional (β) dashpots
-at the sub-contacts; explicit central differences; and a kinematic base
-driven by the excitation's displacement, so that the base velocity seen by
-the contacts is the exact mean velocity of each step. The inner loop is
-:mod:`rockbench.engines.dem2d_kernels` (numba-compiled when available; the
-``dem`` extra installs numba).
+rockbench's own two-dimensional DEM with the same ingredients: rigid convex blocks
+(rectangles, octagons when chamfered, convex prisms) in the x–z plane; soft contacts
+between facing edges, each discretised into ``subcontacts`` points with normal and
+shear springs per unit area (k_n, k_s); no tension; Mohr–Coulomb slip with the
+scenario's friction (``interface_friction`` between blocks); stiffness-proportional
+(β) dashpots; explicit central differences at a step below the stability limit of the
+stiffest contact (``safety``); and a kinematic base driven by the displacement of the
+base motion along x (the only axis applied). The inner loop is
+:mod:`rockbench.engines.dem2d_kernels` (numba-compiled when available; the ``dem``
+extra installs numba).
 
-Why the 3DEC-like model under-dissipates (preset ``paper``)
------------------------------------------------------------
-Housner's impact is an impulse at the new corner alone: angular momentum about
-it is conserved, θ̇⁺ = η θ̇⁻, η = 1 − 2 m b² / I_O. With sub-contacts spread
-over the face (3DEC's 5 or more) the impact impulse is spread over the face
-too, and an upward impulse at a distance x from the new corner adds the
-moment −x P_z about it, in the sense of the motion: the block keeps more of its
-rotation. Measured on B2 (η = 0.70): 0.91 with 5 sub-contacts and ζ = 0.14,
-0.79 with β = 1e-3 s (ζ = 10), so no β closes the gap (benchmarks/
-calibrate_dem2d.py: impacts 2–3 up to 58 % late, 0.13–0.70 λ off over 20 s).
-The face of a rigid block on a flat base can only touch at its corners, so
-the calibrated model puts the sub-contacts there (``subcontacts = 2``): in the
-limit of a stiff, critically or over-damped corner it is the rigid
-linear-complementarity impact whose unique solution is Housner's (impulse at
-the new corner, the old one lifting off).
+The calibrated model puts the sub-contacts at the corners (``subcontacts = 2``), the
+only points where a rigid block on a flat face can touch, so that a stiff, damped
+corner gives Housner's impact (impulse at the new corner, the old one lifting off). Its
+damping is the corner's damping ratio ζ_c (``impact_zeta``; :func:`impact_zeta_for`
+meets a scenario's ``eta`` override); its stiffness is raised until a block at the
+uplift threshold turns by the fraction ``compliance`` of λ (:func:`stiffness_for`), and
+further (``slip_compliance``) on a contact that slides before its blocks rock
+(:func:`slides_first`). A column (single blocks, stacks, drum columns, parapets) is
+laid out from its chain of blocks (:func:`adjacent_pairs`, :func:`corner_contact`);
+any other geometry (walls, arches, fixed supports) from every pair of bodies
+(:func:`contact_pairs`) with the stiffness and damping of its interface at rest
+(:func:`assembly_contacts`), and a stable step bounded per block.
 
-Impact damping (``damping = "impact"``)
----------------------------------------
-The corner sub-contact, as an equivalent single-DOF contact (Vlachakis et al.
-2021, J. Eng. Mech. 147(11), equivalent viscous damping of block-based codes;
-DeJong's restitution–β correlation for 3DEC), is the spring K = k_n A_c (A_c the
-end sub-contact's tributary area) carrying the effective corner mass
-m_c = 1 / (1/M + b²/I_G) of the blocks above the contact. Its linear dashpot with
-the no-tension cut-off (F = K x + c ẋ ≥ 0) has coefficient of restitution
-e(ζ) = 0.74, 0.30, 0.135, 0.048, 0.024, 0.009 at ζ = 0.1, 0.5, 1, 2, 3, 5
-(the calibration script integrates it; e → 0 only as ζ → ∞). Housner's
-impact is e = 0 at the new corner, so ``impact_zeta`` sets ζ_c and
-β = 2 ζ_c / sqrt(K / m_c) per pair (the dashpots act on the normal and the
-shear springs; at the pivot the velocity vanishes, so they act only during
-impacts). Measured first-impact
-ratio on B2 relative to η: +17 % at ζ_c = 0, +2.5 % at 0.5, +0.69 % at 1,
-+0.07 % at 2, +0.02 % at 3 (``--only eta`` of the calibration script has all four
-blocks). A scenario's ``eta`` override (single blocks) is met by bisection on
-ζ_c with a probe impact of the block itself from its release angle
-(:func:`impact_zeta_for`, about 1 s of CPU once per run); the reachable range
-is η_Housner … η(ζ_c = 0) (0.70 … 0.82 on B2): less dissipation comes from a
-partly elastic corner, which bounces, so only the first impact matches and the
-trajectory then differs from the reference's (B2 from 0.5 λ over 4 s: 0.041 λ
-at η = 0.75, 0.095 λ at η = 0.8); an override below Housner's η is
-unsupported.
+Presets:
 
-Contact stiffness (``compliance``)
-----------------------------------
-On its two corner springs K (at ±b, carrying M g) a block under the moment
-M a h_G of a base acceleration a rotates by θ = M a h_G / (2 K b² − M g h_G)
-while both springs stay compressed; the heel lifts exactly at the rigid
-threshold a = g b / h_G (with 5 sub-contacts of a Winkler face it lifts from
-a third of it on, which is why the 3DEC-like model rocks below the threshold).
-Asking θ(g tan λ) = ε λ gives K = M g (b / (ε λ) + h_G) / (2 b²), i.e. the k_n
-of :func:`stiffness_for`; k_n (and k_s in proportion) is the larger of the knob
-and that value over the stack's interfaces. ε also sets how far the compliant
-pivot is from a point: pulse peaks on Single #2 are +6.1 % off at
-k_n = 1e9 N/m³ (ε = 1.8e-3), 0.7 % at 1e10, 0.1 % at 1e11; the paper's stack
-needs ε ≈ 2e-5. ``accurate``: ε = 2e-5 (k_n = 9.2e10 N/m³ for Single #2,
-1.1e11 for the paper's stack; the 1 kg catalog blocks keep the 1e9 floor,
-ε ≈ 1e-6); at 0.8 × the threshold Single #2 then rotates by 1.6e-5 λ.
+* ``accurate`` (the defaults): corner sub-contacts, k_n = k_s ≥ 1e9 N/m³ raised to
+  ``compliance`` 2e-5 (``slip_compliance`` 5e-7), ζ_c = 3, safety 2.
+* ``fast``: k_n ≥ 1e8 N/m³, ``compliance`` 5e-5 for every contact, ζ_c = 2; the
+  assembly studies' preset.
+* ``paper``: the paper's 3DEC-like model (5 sub-contacts over the face,
+  k_n = 1e9 N/m³, Rayleigh β = 0.14 / ω_c, safety 0.2), which under-dissipates at
+  impacts.
 
-Contacts that slide first (``slip_compliance``)
------------------------------------------------
-A contact whose friction is below the uplift ratio of the blocks it carries
-(μ < b / h_G, :func:`slides_first`) slides before they rock, and every
-reversal of its slip costs the blocks momentum to the same elasticity: the
-friction's moment μ M g h_G changes sign, so the block has to pitch over on its
-corner springs (the elastic rotation above, ω_p = sqrt(2 K b² / I_O) with I_O
-about the face's centre: 859 rad/s, ζ ≈ 0.6 for Single #2 at ε = 2e-5); the
-corners stick while it does (friction M (ü_g + h_G θ̈) below μ M g) until the
-pitch's acceleration has gone, and the centroid keeps the pitch's h_G θ̇,
-about 2 μ g / ω_p times a damping factor, for the whole slide that follows.
-Single #2 at μ = 0.15 on the 3 Hz / 8 mm sine: 1.4 mm/s at the reversal of
-0.365 s, a slip error of 3.5 % of the peak exact slip. A stack's interface carries
-exactly μ N while the stack slides as one, so it keeps each such kick as a
-steady slip: 1.9e-4 m on the 5 Hz / 4 mm pulse at μ = 0.1. The shear springs
-take no part (without the shear dashpot: 3.4 %; a quarter of the step: 3.46 %);
-the error falls as sqrt(ε) (3.5, 1.8, 0.81, 0.57 % at ε = 2e-5, 5e-6, 1e-6,
-5e-7), and so does the step. Such a contact of a column (a single block, a stack) takes
-ε = ``slip_compliance`` where that is smaller: ``accurate`` 5e-7 (k_n = 3.7e12
-N/m³ for Single #2 at μ = 0.15, 4.5e12 for the paper's stack at μ = 0.1; 6.3 ×
-smaller steps, 5–7 × the CPU). ``fast`` keeps ε for every contact; the
-rocking cases (μ = 1 against b/h ≤ 0.67) are untouched.
-
-Time step
----------
-Δt = safety · sqrt(m_eff / k_max) · (sqrt(1 + ζ_max²) − ζ_max), the
-central-difference limit of the stiffest contact, k_max = max(k_n, k_s) · (largest
-face), with the effective mass m_eff = 1 / (1/m + R²/I) (R: the farthest vertex)
-and ζ_max = β_max sqrt(k_max / m_eff) / 2; rounded down to a whole number of
-steps per output interval. The bound is conservative: B2, Single #2 and the
-paper's stack stay stable at 8 × its safety-1 step; ``accurate`` uses safety 2.
-
-Geometries
-----------
-A column (:attr:`~rockbench.geometry.Geometry.column`: upright rectangular
-blocks each on the one below, the bottom one on the base: the single blocks,
-the paper's stacks, and the catalog's drum columns and parapets) is built as
-a stack: its contacts are laid out from its chain (:func:`adjacent_pairs`,
-:func:`corner_contact`: the blocks a contact carries as one upright rigid
-body, ``slip_compliance`` where a contact slides first) and the stable step is
-that of the stiffest face. Any other :class:`~rockbench.geometry.Geometry` (a
-running-bond wall, an arch: blocks at any pose, convex prisms, fixed supports)
-is built from the same parts: each block (rectangle or convex prism) a polygon
-at its pose, each fixed support a body with zero inverse mass translating with
-the base, and the same face-pair contact with corner sub-contacts between every
-block and every other body (:func:`contact_pairs`). The stiffness from
-``compliance`` (``slip_compliance`` is not applied: such a geometry has no exact
-sliding reference, and its stiffest faces already set small steps) and the
-impact β of each pair come from its interface at rest
-(:func:`assembly_contacts`; a pair not in contact at rest takes the upper
-block alone on its own face). A block of a wall or an arch rests on several
-faces at once, so the stable step is bounded per block on all its contacts
-together (:func:`_assembly_step`; the pulses of the collapse study stay stable
-at 4 × that step on the wall and the arch), and the base is wider by the
-geometry's ``room``.
-Measured on the tilting table (rates 0.05 and 0.025 /s, ``fast``): onsets
-+0.8 % (b/h = 0.5 block), +3.0 % (parapet, 0.125), +2.3 % (5-drum column,
-0.24), +1.0 % (9-voussoir arch t/R = 0.2, 0.298) over the limit-analysis
-factor at the slower rate, the rate^(2/3)-extrapolated onsets within 0.1 %
-(0.24 % on the parapet, 0.17 % on the column, as built either way), with the
-LP's blocks and rotation signs. Steps at ``fast``: 11 µs (5-drum
-column), 18 µs (parapet), 1.7 µs (arch t/R = 0.2: its short voussoir faces
-carry the whole arch), 0.5 µs (the 6 × 3 wall of 0.24 × 0.12 m bricks, about
-8 s CPU per simulated second: too costly for the tilting table's tens of
-seconds).
-
-Calibration (benchmarks/calibrate_dem2d.py; ``accurate`` / ``fast``)
---------------------------------------------------------------------
-In-process CPU times on a shared 2-core machine.
-
-* Free rocking, B0–B3 (10 catalog cases, 20 s): max |θ − θ_ref| / λ ≤ 0.0012 /
-  0.0052 (B0); first three impact times within 0.044 % / 0.19 %; 0.6–1.1 s /
-  0.12–0.22 s CPU per case (the 3DEC-like model: 0.6 s).
-* Single #2 pulses (6, 4 s): peaks within 0.1 % / 0.3 % of Housner's;
-  0.07–0.08 s / 0.04–0.05 s CPU (the 3DEC-like model: 0.01 s: the calibrated
-  contacts are 90 × stiffer for this 228 kg block and over-damped).
-* The paper's two-block pulses (8, 4 s): both peaks within 2.0 % / 5.0 % of
-  the two-block model where it is ≥ 0.02 λ (3.3 Hz / 4 mm, 0.010 λ, is near
-  the threshold and not scored: 0.008 / 0.006 λ); 0.35–0.47 s / 0.16–0.21 s.
-* The sliding suite (6 cases, μ = 0.1–0.25 below b/h; tests/test_sliding_engines.py):
-  slip within 0.57 % of the exact Coulomb slider's peak slip (the 3 s sine;
-  the others ≤ 0.16 %), the stack's interface slip 3.5e-5 m (0.28 % of the
-  peak slip), the interface-slip case within 0.011 %; rocking ≤ 1e-6 λ;
-  0.08–1.0 s CPU (0.04–0.16 s with the rocking stiffness, which left 3.5 % on
-  the sine and 1.9e-4 m at the stack's interface).
-* ``fast`` against ``accurate``: B2 free rocking within 0.005 λ, the Single #2
-  3.3 Hz / 6 mm pulse peak within 1 %, the stack's 5 Hz / 4 mm peaks within
-  3 % (tests/test_engine_dem2d.py); 0.014 λ on the 10 s single-sine-5.0hz-6mm
-  (the 3DEC-like presets were 0.79 λ apart there).
-* ``paper`` (5 sub-contacts, β = 0.14 / ω_c with ω_c = sqrt(k_n w d / m) of the
-  bottom block, the paper's β = 2.25e-4 s for Single #2) keeps the 3DEC-like
-  results: 0.13–0.70 λ on free rocking, impacts 2–3 of B2 +24 % / +41 % late
-  (up to +58 % on B1), +5 to +39 % on the single pulses, 0.067 λ at 0.8 × the
-  uplift threshold; it fails the conformance kit's free_rocking, forced_peak
-  and subthreshold checks, which ``accurate`` passes.
+Known limits: planar; an ``eta`` override below Housner's η is unsupported; walls of
+small bricks need sub-microsecond steps. See :doc:`the engine's page </engines/dem2d>`
+in the documentation for the model's derivation, calibration, accuracy and cost.
 """
 
 from __future__ import annotations
@@ -179,6 +52,7 @@ from rockbench.engines import dem2d_kernels as K
 from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
+from rockbench.geometry import Block
 from rockbench.scenarios import Free, Scenario
 
 __all__ = ["CornerContact", "Dem2dEngine", "Dem2dSettings", "adjacent_pairs", "assembly_contacts",
@@ -200,8 +74,8 @@ class Dem2dSettings(EngineSettings):
     where a contact slides first, impact damping ζ_c = 3, safety 2), ``fast``
     (k_n ≥ 1e8 N/m³, 5e-5 λ for every contact, ζ_c = 2) and ``paper`` (the
     3DEC-like model of the paper: 5 sub-contacts, k_n = 1e9 N/m³, β = 0.14 / ω_c,
-    safety 0.2; it under-dissipates at impacts). The module docstring has the
-    calibration and the measured distances.
+    safety 0.2; it under-dissipates at impacts). The engine's documentation page has
+    the calibration and the measured accuracy.
 
     Parameters
     ----------
@@ -210,7 +84,7 @@ class Dem2dSettings(EngineSettings):
         two facing edges, ends included (the ends are the rocking pivots).
         2 (the corners only) reproduces Housner's impact; more spread the
         impact impulse over the face and keep more of the rocking
-        (module docstring).
+        (see the engine's documentation page).
     kn : float
         Normal stiffness per unit area (N/m³); each sub-contact's spring is
         k_n times its tributary area. The paper's Table 5: 1e9. With
@@ -227,7 +101,7 @@ class Dem2dSettings(EngineSettings):
         ε of the contacts of a column (a single block, a stack) that slide before the
         blocks they carry rock (μ < b / h_G, :func:`slides_first`), where it is
         smaller than ``compliance``: each reversal of slip leaves the blocks
-        the momentum of their elastic pitch, ∝ sqrt(ε) (module docstring).
+        the momentum of their elastic pitch, ∝ sqrt(ε) (see the engine's page).
         None: ``compliance`` for every contact.
     damping : {"impact", "contact"}
         How β is chosen when ``beta`` is None. "impact": each pair's β gives
@@ -309,7 +183,7 @@ def contact_pairs(scenario: Scenario) -> list[tuple[int, int]]:
 
 @dataclass(frozen=True)
 class CornerContact:
-    """The corner sub-contact of a pair as a single-DOF system (module docstring).
+    """The corner sub-contact of a pair as a single-DOF system (the page's "Impact damping").
 
     Attributes
     ----------
@@ -342,15 +216,15 @@ def corner_contact(scenario: Scenario, pair: tuple[int, int],
                    subcontacts: int) -> CornerContact:
     """The corner sub-contact of ``pair`` of a column (upper body first; the base is
     ``len(blocks)``), the carried blocks taken upright as one rigid body."""
-    blocks = scenario.blocks
+    col = scenario.geometry.column
+    if col is None:
+        raise ValueError(f"scenario {scenario.name!r} is not a column")
+    blocks = col.blocks
     i, j = pair
     faces = [blocks[i]] if j == len(blocks) else [blocks[i], blocks[j]]
     if j == len(blocks):
         width = 2.0 * blocks[i].pivot_half_width
     else:  # the shared part of the two faces (an offset block overhangs)
-        col = scenario.geometry.column
-        if col is None:
-            raise ValueError(f"scenario {scenario.name!r} is not a column")
         left, right = col.overlap(i)
         width = right - left
     depth = min(b.depth for b in faces)
@@ -425,7 +299,7 @@ def _pair_contact(scenario: Scenario, pair: tuple[int, int], subcontacts: int,
 
 def stiffness_for(contact: CornerContact, compliance: float, g: float = 9.81) -> float:
     """k_n (N/m³) for which the carried blocks rotate by ``compliance`` · λ at the uplift
-    threshold on two corner springs (module docstring, "Contact stiffness").
+    threshold on two corner springs ("Contact stiffness" on the engine's page).
 
     Two springs K = k_n A at ±b under the weight M g and the moment M a h_G of a
     base acceleration a give θ = M a h_G / (2 K b² − M g h_G) while both stay
@@ -439,7 +313,7 @@ def stiffness_for(contact: CornerContact, compliance: float, g: float = 9.81) ->
 
 def slides_first(contact: CornerContact, mu: float) -> bool:
     """Whether a contact of friction ``mu`` slips before the blocks it carries rock:
-    μ below their uplift ratio b / h_G (module docstring, "Contacts that slide first")."""
+    μ below their uplift ratio b / h_G ("Contacts that slide first" on the engine's page)."""
     return mu * contact.height < contact.half_width
 
 
@@ -478,7 +352,7 @@ def adjacent_pairs(scenario: Scenario) -> list[tuple[int, int]]:
 
 def pair_damping(scenario: Scenario, s: Dem2dSettings, kn: float) -> np.ndarray:
     """β (s) of every candidate pair of :func:`contact_pairs` at normal stiffness ``kn``
-    (module docstring, "Impact damping")."""
+    ("Impact damping" on the engine's page)."""
     pairs = contact_pairs(scenario)
     if s.beta is not None:
         return np.full(len(pairs), float(s.beta))
@@ -495,6 +369,15 @@ def pair_damping(scenario: Scenario, s: Dem2dSettings, kn: float) -> np.ndarray:
     return out
 
 
+def _single_block(scenario: Scenario) -> Block:
+    """The scenario's one rectangular block, whose η an ``eta`` override calibrates."""
+    col = scenario.geometry.column
+    if col is None or len(col) != 1:
+        raise UnsupportedScenario("dem2d calibrates an eta override for a single rectangular "
+                                  "block only (the override is a single-block quantity)")
+    return col.blocks[0]
+
+
 def probe_eta(scenario: Scenario, s: Dem2dSettings, tilt: float = 0.05) -> float:
     """The impact ratio η that ``s`` gives the scenario's single block (measured).
 
@@ -503,7 +386,7 @@ def probe_eta(scenario: Scenario, s: Dem2dSettings, tilt: float = 0.05) -> float
     lower), with the release angle θ₀ through the energy of rocking about a corner:
     η² = (cos(λ − θ₁) − cos λ) / (cos(λ − θ₀) − cos λ).
     """
-    rp = scenario.blocks[0].rocking(scenario.g)
+    rp = _single_block(scenario).rocking(scenario.g)
     t_impact = math.acosh(1.0 / (1.0 - tilt)) / rp.p  # linearised Housner
     probe = scenario.replace(name="dem2d-eta-probe", excitation=Free(), initial_tilt=tilt,
                              duration=3.5 * t_impact, output_rate=20_000.0)
@@ -538,7 +421,7 @@ def impact_zeta_for(scenario: Scenario, s: Dem2dSettings, eta: float) -> float:
         beta = float(pair_damping(scenario, zs, kn)[0])
         return probe_eta(scenario, zs.replace(beta=beta, timestep=dt), tilt)
 
-    eta_h = scenario.blocks[0].rocking(scenario.g).eta
+    eta_h = _single_block(scenario).rocking(scenario.g).eta
     lo, hi = 0.0, s.impact_zeta
     eta_lo, eta_hi = eta_at(lo), eta_at(hi)
     if eta_h - 1e-9 <= eta <= eta_hi:  # Housner's (the preset's ζ_c is within 0.1 %)
@@ -629,7 +512,7 @@ class Dem2dEngine(Engine):
     assembly_preset: ClassVar[str] = "fast"
     # keep in step with the README's engine table
     known_failures: ClassVar[dict[str, str]] = {
-        # none at the accurate preset (measured with benchmarks/calibrate_dem2d.py and the
+        # none at the accurate preset (measured on the calibration cases and with the
         # kit: free rocking, forced peak and sub-threshold pass); the ``paper`` preset keeps
         # the 3DEC-like failures, pinned in tests/test_engine_dem2d.py
     }
@@ -671,13 +554,14 @@ class Dem2dEngine(Engine):
     def time_step(scenario: Scenario, s: Dem2dSettings) -> tuple[float, float, float,
                                                                 np.ndarray]:
         """CFL-bounded time step (before output-rate rounding), k_n, k_s and β of every pair."""
-        blocks = scenario.blocks
         kn, ks = contact_stiffness(scenario, s)
         beta = pair_damping(scenario, s, kn)
         if s.timestep is not None:
             return float(s.timestep), kn, ks, beta
-        if scenario.geometry.column is None:
+        col = scenario.geometry.column
+        if col is None:
             return _assembly_step(scenario, s, kn, ks, beta), kn, ks, beta
+        blocks = col.blocks
         k_max = max(kn, ks) * max(b.width * b.depth for b in blocks)
         m_eff = min(1.0 / (1.0 / b.m + (b.b ** 2 + b.h ** 2) / b.inertia[1]) for b in blocks)
         omega_max = math.sqrt(k_max / m_eff)
@@ -686,12 +570,11 @@ class Dem2dEngine(Engine):
         return dt, kn, ks, beta
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
-        s: Dem2dSettings = settings  # type: ignore[assignment]
+        assert isinstance(settings, Dem2dSettings)  # resolve_settings made it one
+        s = settings
         eta = scenario.contact.eta
         if eta is not None and s.damping == "impact" and s.beta is None:
-            if scenario.n_blocks != 1:
-                raise UnsupportedScenario("dem2d calibrates an eta override for single blocks "
-                                          "only (the override is a single-block quantity)")
+            _single_block(scenario)  # raises UnsupportedScenario for any other geometry
             dt_max = self.time_step(scenario, s)[0]
             s = s.replace(impact_zeta=impact_zeta_for(scenario, s, eta), timestep=dt_max)
         dt_max, kn, ks, beta = self.time_step(scenario, s)
@@ -762,11 +645,13 @@ class Dem2dEngine(Engine):
         # the kernel writes the blocks' poses after every call (read for free)
         self._poses = np.zeros((nb, 7))
         K.write_poses(pos, self._poses)
-        self._args = (pos, vel, inv_m, inv_i, lverts, lnorm, nverts, radius,
-                      self._state["pairs"], self._state["pair_depth"],
-                      self._state["pair_edges"], self._state["shear"], kn, ks,
-                      pair_mu, beta,
-                      float(scenario.g), self._poses)
+        # the kernels' arguments, each of its own type (mypy checks the kernel calls)
+        self._args = (
+            pos, vel, inv_m, inv_i, lverts, lnorm, nverts, radius,
+            self._state["pairs"], self._state["pair_depth"],
+            self._state["pair_edges"], self._state["shear"], kn, ks,
+            pair_mu, beta,
+            float(scenario.g), self._poses)
         self._dt = dt
         self._nb = nb
         self._buf = np.zeros(0)
@@ -850,4 +735,4 @@ class Dem2dEngine(Engine):
 
     def _teardown(self) -> None:
         self._state = {}
-        self._args = ()
+        vars(self).pop("_args", None)  # the kernels' arrays (the next _build sets them)

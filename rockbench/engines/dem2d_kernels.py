@@ -1,48 +1,41 @@
 """Compiled inner loop of the ``dem2d`` engine (Distinct Element Method, planar rigid blocks).
 
-The functions are plain Python over NumPy arrays and scalars; when numba is
-installed they are compiled with :func:`numba.njit` (``cache=True``, so the
-compilation of a few seconds is paid once per machine, not once per process).
-Without numba the very same code runs interpreted: identical results, about
-three orders of magnitude slower (``HAVE_NUMBA`` tells which).
+The functions are plain Python over NumPy arrays and scalars; when numba is installed
+they are compiled with :func:`numba.njit` (``cache=True``: the few seconds of compilation
+are paid once per machine, not once per process). Without numba the same code runs
+interpreted, with identical results, about three orders of magnitude slower
+(``HAVE_NUMBA`` tells which). :class:`~rockbench.engines.dem2d_engine.Dem2dEngine`
+builds the arrays and calls :func:`advance`.
 
-Model (one time step, 3DEC's cycle in two dimensions, x–z plane)
------------------------------------------------------------------
-Bodies are convex polygons; body ``nbody − 1`` is the kinematic base, and the
-bodies before it with zero inverse mass (an assembly's fixed supports, after
-the blocks) translate with it. For each
-candidate pair (i, j) of bodies the contact is the pair of edges (a of i, b of
-j) that face each other and are closest to anti-parallel (within 45°) with a
-non-empty overlap: the part of edge b onto which edge a projects, bounded by
-the vertices of either edge (so the overlap ends are the vertices that act as
-rocking pivots), penetrating by less than a tenth of the shorter edge (so that
-a face of a side neighbour a whole block away is never taken for a contact).
-``nsub`` sub-contacts are spread over the overlap, ends included, with trapezoidal
-tributary lengths times the contact depth (the
-smaller out-of-plane depth of the two bodies) as areas. At each sub-contact
-the gap g along b's outward normal n (negative: overlap) gives
+One time step is 3DEC's cycle in the x–z plane. Bodies are convex polygons; body
+``nbody − 1`` is the kinematic base, and the bodies before it with zero inverse mass
+(an assembly's fixed supports) translate with it. The contact of a candidate pair is
+the pair of facing edges closest to anti-parallel (within 45°) with a non-empty
+overlap, bounded by the vertices of either edge (the rocking pivots) and penetrating by
+less than a tenth of the shorter edge. ``nsub`` sub-contacts are spread over the
+overlap, ends included, with trapezoidal tributary lengths times the smaller depth of
+the two bodies as areas. At each sub-contact, with the gap g along the outward normal
+(negative: overlap) and the relative velocity (v_n, v_t) there:
 
 * normal force  F_n = max(0, −k_n A g − β k_n A v_n)   (no tension; β of the pair),
-* shear force   F_s += −k_s A v_t Δt, |F_s| ≤ μ F_n (Mohr–Coulomb, no cohesion; μ of the pair),
-  plus the dashpot −β k_s A v_t while it sticks,
+* shear force   F_s += −k_s A v_t Δt, |F_s| ≤ μ F_n (Mohr–Coulomb, μ of the pair),
+  plus the dashpot −β k_s A v_t while it sticks.
 
-with v_n, v_t the relative velocity of the two bodies' material points there.
-A sub-contact that opens forgets its shear force; so does a contact whose edge
-pair changes. Forces act at the mid-point of the overlap on both bodies
-(action = reaction, angular momentum conserved). Motion: central differences,
-v(t + Δt/2) = v(t − Δt/2) + a(t) Δt, x(t + Δt) = x(t) + v(t + Δt/2) Δt; the
-contact forces at t use positions at t and velocities at t − Δt/2 (so that
-the shear increment is exactly the relative displacement over the last step).
+A sub-contact that opens, or whose edge pair changes, forgets its shear force. Forces
+act at the mid-point of the overlap on both bodies (angular momentum conserved).
+Motion is central differences, v(t + Δt/2) = v(t − Δt/2) + a(t) Δt and
+x(t + Δt) = x(t) + v(t + Δt/2) Δt, the forces at t from positions at t and velocities
+at t − Δt/2 (so the shear increment is the relative displacement of the last step).
 
-Sign conventions: θ is the rotation about +y (top toward +x positive); a
-body vector (r_x, r_z) is (r_x c + r_z s, −r_x s + r_z c) in the world; the
-velocity of a point at arm r is ω (r_z, −r_x) and a force F at r gives the
-moment r_z F_x − r_x F_z.
+Sign conventions: θ is the rotation about +y (top toward +x positive); a body vector
+(r_x, r_z) is (r_x c + r_z s, −r_x s + r_z c) in the world; the velocity of a point at
+arm r is ω (r_z, −r_x) and a force F at r gives the moment r_z F_x − r_x F_z.
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -53,7 +46,7 @@ try:  # numba is an optional extra: rockbench[dem]
 except ImportError:  # pragma: no cover - depends on the environment
     HAVE_NUMBA = False
 
-    def njit(*args, **kwargs):  # type: ignore[no-redef]
+    def njit(*args: Any, **kwargs: Any) -> Any:  # type: ignore[no-redef]  # numba absent
         """Identity decorator standing in for numba.njit."""
         if len(args) == 1 and callable(args[0]) and not kwargs:
             return args[0]

@@ -1,82 +1,39 @@
 """Drake engine plugin: rigid blocks as free bodies of a discrete MultibodyPlant.
 
-Scene (a MultibodyPlant + SceneGraph Diagram stepped by a Simulator)
---------------------------------------------------------------------
-* The plant is discrete (``time_step`` = the ``timestep`` knob); its contact
-  problem is solved by SAP (approximations ``"sap"``, ``"similar"``,
-  ``"lagged"``) or TAMSI (``"tamsi"``), with point contact or hydroelastic
-  contact (``contact_model``).
-* Each block is a free body (quaternion floating joint) whose frame is the
-  centroid, with the explicit mass and principal inertia of :attr:`Block.inertia`.
-  Its collision shape is a ``Box``, or, when chamfered, a ``Convex`` made of the
-  :meth:`Block.profile` polygon extruded along y (an in-memory .obj, no file),
-  split along y into ``collision_slices`` equal slices (same x–z profile, depth
-  depth/N each) so that a rocking edge carries N contact points, not one; the
-  inertia is the full block's. With ``corner_radius`` r (the default), spheres of
-  radius r at the profile's vertices of every slice carry the contact instead:
-  the shape–shape and shape–ground pairs are filtered out, leaving corner–ground and
-  corner–shape pairs (a convex block touches a plane or a convex block at vertices).
-* The ground is a ``Box`` whose top face is the plane z = 0 (a ``HalfSpace``
-  gives a single contact point and +9 % on the first rocking peak). In free
-  rocking it is welded to the world. Under base excitation it belongs to a heavy
-  body on a prismatic joint along x, driven exactly: before every step its
-  position is overwritten with u(t) and its velocity with v(t + φ·dt)
-  (φ = ``base_velocity_phase``). The discrete update then moves it with that
-  velocity over the step (its mass is 10⁶ × the blocks', so contact barely
-  changes it), which imposes the base acceleration (v(t_{n+1/2}) − v(t_{n−1/2}))/dt
-  ≈ ü_g(t_n) on the blocks at the step where their positions are q_n (the
-  symplectic-Euler/leapfrog pairing). No input port is involved, so there is no
-  half-step shift of a zero-order-held input. After the excitation the joint is
-  locked (SAP) or its velocity zeroed (TAMSI), and steps are batched in C++.
-* Contact: Coulomb friction from the scenario (static = dynamic; an interface
-  friction through per-geometry coefficients, :func:`harmonic_frictions`). Point contact
-  stiffness is ``point_stiffness`` (or, if None, Drake's estimate from
-  ``penetration_allowance``); dissipation is SAP's ``relaxation_time`` (for the
-  ``"sap"`` approximation) or the Hunt–Crossley ``hunt_crossley_dissipation``
-  (TAMSI, ``"similar"``, ``"lagged"``). Drake has no restitution coefficient:
-  these compliant contacts are (nearly) plastic, as Housner assumes, and
-  scenarios with restitution > 0 are reported unsupported.
-* No damping, no sleeping (Drake has neither).
-* Any geometry (:mod:`rockbench.geometry`): every block, rectangular or a convex prism,
-  is a body at its pose (a prism with its full inertia tensor, whose x–z product is not
-  zero), its corner spheres on every slice; fixed supports are shapes of the ground's
-  body (boxes, or prisms twice the blocks' depth) with corner spheres of their own, so
-  that a block's face on a support's corner has a point too. A column
-  (:attr:`~rockbench.geometry.Geometry.column`: each block touches only the ones below
-  and above it) takes its frictions from :func:`harmonic_frictions`; any other
-  geometry from :func:`assembly_harmonic_frictions`: a block may touch the base and
-  other blocks at once, so an interface friction at most half the base's is
-  unsupported there. At ``fast`` (0.5 ms) TAMSI's Newton iteration fails on larger
-  geometries (the 18-brick wall at 0.03 s): the run ends there as ``unstable`` (NaN
-  poses, Drake's reason logged).
+A MultibodyPlant and SceneGraph diagram stepped by a Simulator. The plant is discrete
+(period ``timestep``); its contact problem is solved by TAMSI or SAP
+(``contact_approximation``), with point or hydroelastic contact (``contact_model``).
+Each block is a free body at its centroid with the block's mass and inertia tensor; its
+collision shape (a ``Box``, or a ``Convex`` prism for a chamfered block or a convex
+prism) is cut along y into ``collision_slices`` slices, since Drake's point contact
+gives one point per pair of shapes. With ``corner_radius`` (the default) small spheres
+at the corners of every slice carry the contact instead, so that every corner has its
+own point. The ground is a ``Box`` whose top face is z = 0: welded in free rocking,
+otherwise a heavy body on a prismatic joint along x whose position and velocity are
+overwritten before every step with u(t) and v(t + φ dt) (φ = ``base_velocity_phase``),
+held still once the motion ends, so that steps are batched in C++. The base motion is
+applied along x only. Fixed supports are shapes of the ground's body with corners of
+their own. Friction is Coulomb's (static = dynamic), combined harmonically per pair
+(:func:`harmonic_frictions`, :func:`assembly_harmonic_frictions`); the point-contact
+stiffness comes from ``static_penetration`` (or ``point_stiffness``), the dissipation
+from ``hunt_crossley_dissipation`` (or SAP's ``relaxation_time``). Drake has no
+restitution coefficient, no damping and no sleeping.
 
-Drake's point contact between two boxes (or a convex prism and a box) yields a
-single contact point per pair, at one end of the rocking edge (y = ±depth/2).
-With one collision shape per block that point flips between the ends of the
-edge: the block wobbles out of plane (up to 0.02 rad), the impact dissipation
-varies by ±0.3 % and mirrored runs differ by 0.02 λ. Slicing the collision
-shape along y gives every slice its own point, so the edge is supported at N
-places symmetric about the mid-plane (4 slices: wobble ≤ 4e-4 rad). The same
-single point also sits at one end of a face resting on the ground or on a block
-(x = ±b/2), and that end flips between steps: the block chatters on alternate
-edges and creeps at saturated friction when it should stick (B2 on μ 0.2 slides
-from t = 0, 5 % slip error; a stack interface stays on one edge, 60–69 % off the
-two-block peaks). Corner spheres give every corner its own point: sliding within
-0.42 % of the exact Coulomb slider, stack pulses within 1.4 %.
+Presets and knobs:
 
-SAP's ``"sap"`` approximation (Anitescu's convex relaxation) makes a sliding contact
-separate at v_n = μ|v_t| (measured sep/slip = 0.146 at μ 0.15): the block hops
-every few steps on its leading corners and a μ near b/h rocks it (0.11–0.18 λ).
-With corner spheres ``"similar"`` misses by 1.5–7.6 % (and rocks to 0.2 λ with a
-stiffer contact), ``"lagged"`` by 20–82 %. TAMSI slides like Coulomb friction and,
-unlike SAP (whose near-rigid regime caps the stiffness), takes the stiff contact
-that a block needs not to tilt on its corners as it starts to slide: its slip
-error on the μ 0.15 pulse falls from 4.4 % (static penetration 1e-5 m) to 0.25 %
-(1e-8 m).
-Hydroelastic contact (``contact_model="hydroelastic"``) gives a pressure field
-over the contact patch instead, with compliant blocks of ``hydroelastic_modulus``
-on a rigid ground (``corner_radius`` None; measured with SAP and box slices: 0.28 %
-on B2's sliding pulse, 4.9 % and 2.7 % on the slender block's, at 5x the cost).
+* ``accurate`` (the defaults): TAMSI at Δt 0.05 ms, 4 slices with corner spheres of
+  1e-5 m, a static penetration of 1e-8 m and a Hunt–Crossley dissipation of 1000 s/m,
+  which makes a corner's landing plastic as in Housner's model.
+* ``fast``: Δt 0.5 ms, 2 slices, Drake's own dissipation.
+* Also: ``penetration_allowance``, ``near_rigid_threshold``, ``stiction_tolerance``
+  and the hydroelastic knobs.
+
+Known limits: the most expensive engine per step; restitution > 0, and on assemblies an
+interface friction at most half the base's, are unsupported; at ``fast`` TAMSI may fail
+on larger geometries (the run ends ``unstable``); TAMSI is removed after Drake 1.51.
+
+See :doc:`the engine's page </engines/drake>` in the documentation for its
+calibration, measured accuracy and cost.
 """
 
 from __future__ import annotations
@@ -124,8 +81,8 @@ class DrakeSettings(EngineSettings):
     contact_approximation : {"sap", "similar", "lagged", "tamsi"}
         ``discrete_contact_approximation``: the first three are solved by SAP
         (convex, with joint locking), ``"tamsi"`` by the older, cheaper TAMSI
-        solver (deprecated by Drake, removal announced for 2026-09; still in 1.51),
-        the only one that slides like Coulomb friction (module docstring).
+        solver (deprecated by Drake, removed after 1.51), the only one that slides
+        like Coulomb friction (see the engine's documentation page).
     contact_model : {"point", "hydroelastic", "hydroelastic_with_fallback"}
         Point contact (one point per geometry pair) or hydroelastic contact
         (a pressure field over the patch; blocks compliant, ground rigid).
@@ -183,28 +140,8 @@ class DrakeSettings(EngineSettings):
 
     Notes
     -----
-    Calibrated with ``benchmarks/calibrate_drake.py`` (free rocking B0–B3 over
-    20 s, six Single #2 sine pulses) and the ``sliding`` suite against the exact
-    Coulomb slider, and the paper's two-block stack (``benchmarks/stack_convergence.py``).
-    ``accurate`` (TAMSI, dt 0.05 ms, corner spheres of 1e-5 m on 4 slices, static
-    penetration 1e-8 m, Hunt–Crossley dissipation 1000 s/m): 0.00007–0.0021 λ, impact
-    times within 0.041 %, pulse peaks within 0.052 %, no out-of-plane wobble; slip
-    errors 0.09–0.52 % of the peak slip, rocking < 2e-6 λ; stack pulses within 0.3 %,
-    the two well-posed stack sinusoids within 4.1 % (0.025 ms: 0.16 % / 1.6 %: it
-    converges), interface slip 2e-6 m. At 0.1 ms the 5 Hz / 4 mm stack sinusoid takes
-    the other branch (−40 %). ``fast`` (dt 0.5 ms, 2 slices, Drake's dissipation):
-    ≤ 0.011 λ except B0 over 20 s (0.037 λ), impact times within 0.32 %, pulse
-    peaks within 0.67 %; slip errors 0.11–0.71 % except the μ 0.15 pulse (1.8 %).
-    A larger corner radius moves the rocking pivot inwards by r (1 mm: B2 and B0
-    5.7e-3 λ off); a softer contact tilts the block on its corners when it starts
-    to slide (static penetration 1e-5 m: slip errors up to 4.4 %). The former
-    ``accurate`` (TAMSI at 0.1 ms with Drake's dissipation) held the stack pulses to
-    1.4 % but not the sinusoids (39 %), at half the present cost. The one before
-    (SAP, dt 0.25 ms, box slices, 1e-5 m) rocked within 0.0028 λ but missed every
-    sliding case (2.8–203 %) and the two-block stack (60–69 %). The near-rigid regime
-    of SAP caps the stiffness, so ``static_penetration`` below ~1e-4 m changes
-    nothing under SAP; it matters for heavy blocks, which Drake's own estimate
-    (``penetration_allowance``) lets sink by millimetres.
+    The presets' calibration and their measured accuracy are on
+    :doc:`the engine's page </engines/drake>` in the documentation.
     """
 
     timestep: float = 5.0e-5
@@ -285,6 +222,9 @@ def corner_centres(profile: np.ndarray, r: float) -> np.ndarray:
     return p + bis / np.linalg.norm(bis, axis=1, keepdims=True) * (r / np.sin(half))[:, None]
 
 
+# pydrake's stubs type a 3-vector argument as `numpy.ndarray[numpy.float64[3, 1]]`, which
+# no list or NumPy array type matches (pybind11 converts both): the calls that pass one
+# ignore that error ("pydrake stub mistypes vectors").
 def _convex_prism(profile: np.ndarray, depth: float, name: str) -> Any:
     """Drake ``Convex`` shape of ``profile`` (x, z) extruded over ``depth``, from memory."""
     from pydrake.geometry import Convex, InMemoryMesh
@@ -292,7 +232,7 @@ def _convex_prism(profile: np.ndarray, depth: float, name: str) -> Any:
     try:
         from pydrake.common import MemoryFile
     except ImportError:  # older layout
-        from pydrake.geometry import MemoryFile  # type: ignore[no-redef]
+        from pydrake.geometry import MemoryFile  # type: ignore[no-redef, attr-defined]  # Drake's older layout
 
     return Convex(InMemoryMesh(mesh_file=MemoryFile(prism_obj(profile, depth), ".obj",
                                                     f"{name}.obj")))
@@ -305,7 +245,7 @@ def _add_corners(plant: Any, body: Any, profile: np.ndarray, y: float, r: float,
     from pydrake.geometry import Sphere
     from pydrake.math import RigidTransform
 
-    return [plant.RegisterCollisionGeometry(body, RigidTransform([x, y, z]), Sphere(r),
+    return [plant.RegisterCollisionGeometry(body, RigidTransform([x, y, z]), Sphere(r),  # type: ignore[call-overload]  # pydrake stub mistypes vectors
                                             f"{name}_{k}", props)
             for k, (x, z) in enumerate(corner_centres(profile, r))]
 
@@ -423,7 +363,7 @@ class DrakeEngine(Engine):
         from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
         from pydrake.multibody.tree import PrismaticJoint, SpatialInertia, UnitInertia
         from pydrake.systems.analysis import Simulator
-        from pydrake.systems.framework import DiagramBuilder
+        from pydrake.systems.framework import Diagram, DiagramBuilder
 
         assert isinstance(settings, DrakeSettings)
         s = settings
@@ -462,7 +402,7 @@ class DrakeEngine(Engine):
             else:  # a prism's x–z product of inertia is not zero: its full tensor
                 t = blk.inertia_tensor / blk.m
                 unit = UnitInertia(t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[0, 2], t[1, 2])
-            body = plant.AddRigidBody(f"block{i}", SpatialInertia(blk.m, np.zeros(3), unit))
+            body = plant.AddRigidBody(f"block{i}", SpatialInertia(blk.m, np.zeros(3), unit))  # type: ignore[arg-type]  # pydrake stub mistypes vectors
             # n_sl slices along y, each with one contact point per pair of shapes
             d = blk.depth / n_sl
             if blk.chamfer > 0 or not isinstance(blk, Block):
@@ -472,7 +412,7 @@ class DrakeEngine(Engine):
             for j in range(n_sl):
                 y = (j + 0.5) * d - 0.5 * blk.depth
                 shapes.append(plant.RegisterCollisionGeometry(
-                    body, RigidTransform([0.0, y, 0.0]), shape, f"geom{i}_{j}", p_block))
+                    body, RigidTransform([0.0, y, 0.0]), shape, f"geom{i}_{j}", p_block))  # type: ignore[call-overload]  # pydrake stub mistypes vectors
                 if r is not None:
                     corners += _add_corners(plant, body, blk.profile(), y, r, p_block,
                                             f"corner{i}_{j}")
@@ -484,7 +424,7 @@ class DrakeEngine(Engine):
         ly = 2.0 * (2.0 * max(b.depth for b in blocks) + 0.5)
         lz = 2.0 * (0.25 * ext + 0.1)
         ground = Box(lx, ly, lz)
-        x_ground = RigidTransform([0.0, 0.0, -0.5 * lz])
+        x_ground = RigidTransform([0.0, 0.0, -0.5 * lz])  # type: ignore[call-overload]  # pydrake stub mistypes vectors
         self._joint = None
         if not drive.moving:
             anchor = plant.world_body()  # the body of the ground and supports
@@ -494,13 +434,13 @@ class DrakeEngine(Engine):
             mb = _BASE_MASS_RATIO * sum(b.m for b in blocks)
             # the inertia is irrelevant (the base only slides) but must be valid
             base = plant.AddRigidBody("base", SpatialInertia(
-                mb, np.zeros(3), UnitInertia.SolidBox(lx, ly, lz)))
+                mb, np.zeros(3), UnitInertia.SolidBox(lx, ly, lz)))  # type: ignore[arg-type]  # pydrake stub mistypes vectors
             anchor = base
             ground_id = plant.RegisterCollisionGeometry(base, x_ground, ground, "ground",
                                                         p_ground)
             # no position limits (they would pull the base back), no damping
             self._joint = plant.AddJoint(PrismaticJoint(
-                "slide", plant.world_frame(), base.body_frame(), [1.0, 0.0, 0.0],
+                "slide", plant.world_frame(), base.body_frame(), [1.0, 0.0, 0.0],  # type: ignore[arg-type]  # pydrake stub mistypes vectors
                 -math.inf, math.inf, 0.0))
         # the geometry's supports: shapes of the ground's body (welded to the moving base)
         depth = max(b.depth for b in blocks)
@@ -527,7 +467,7 @@ class DrakeEngine(Engine):
         root = sim.get_mutable_context()
         pc = plant.GetMyMutableContextFromRoot(root)
         for body, (cx, cz, a) in zip(bodies, scenario.initial_poses(), strict=True):
-            plant.SetFreeBodyPose(pc, body, RigidTransform(RotationMatrix.MakeYRotation(a),
+            plant.SetFreeBodyPose(pc, body, RigidTransform(RotationMatrix.MakeYRotation(a),  # type: ignore[call-overload]  # pydrake stub mistypes vectors
                                                            [cx, 0.0, cz]))
         sim.Initialize()
         # discrete state = [q; v]; a free body's q is (qw, qx, qy, qz, x, y, z)
@@ -535,7 +475,9 @@ class DrakeEngine(Engine):
         starts = [b.floating_positions_start() for b in bodies]
         self._idx = np.array([[k + 4, k + 5, k + 6, k, k + 1, k + 2, k + 3] for k in starts])
         self._poses = np.empty((len(blocks), 7))
-        self._plant, self._pc, self._sim, self._diagram = plant, pc, sim, diagram
+        self._plant, self._pc = plant, pc
+        self._sim: Simulator | None = sim  # None after _teardown
+        self._diagram: Diagram | None = diagram
         self._dt = float(s.timestep)
         self._steps = 0
         self._failed = False
@@ -556,7 +498,7 @@ class DrakeEngine(Engine):
         lo, hi = v.min(axis=0), v.max(axis=0)
         if len(v) == 4 and all(len(set(col)) == 2 for col in v.T.tolist()):
             shape = Box(float(hi[0] - lo[0]), 2.0 * depth, float(hi[1] - lo[1]))
-            pose = RigidTransform([0.5 * float(lo[0] + hi[0]), 0.0, 0.5 * float(lo[1] + hi[1])])
+            pose = RigidTransform([0.5 * float(lo[0] + hi[0]), 0.0, 0.5 * float(lo[1] + hi[1])])  # type: ignore[call-overload]  # pydrake stub mistypes vectors
         else:  # vertices in the base's frame (world coordinates at t = 0)
             shape, pose = _convex_prism(v, 2.0 * depth, name), RigidTransform()
         return plant.RegisterCollisionGeometry(body, pose, shape, name, props)
@@ -575,11 +517,14 @@ class DrakeEngine(Engine):
         if self._chunk_start < 0 or j >= _CHUNK or j < 0:
             self._load_chunk(i)
             j = 0
-        self._joint.set_translation(self._pc, self._u[j])
-        self._joint.set_translation_rate(self._pc, self._v[j])
+        joint = self._joint
+        assert joint is not None  # _build adds the joint whenever the base moves
+        joint.set_translation(self._pc, self._u[j])
+        joint.set_translation_rate(self._pc, self._v[j])
 
     def _fix_base(self) -> bool:
         drive, j, pc = self.drive, self._joint, self._pc
+        assert j is not None  # called only while the base moves: _build added the joint
         j.set_translation(pc, float(drive.displacement(drive.end_time)[0]))
         j.set_translation_rate(pc, 0.0)
         if self._sap:
@@ -592,6 +537,7 @@ class DrakeEngine(Engine):
         if self._failed:
             return
         self._steps += n
+        assert self._sim is not None  # (built by _build)
         try:
             self._sim.AdvanceTo(self._steps * self._dt)
         except RuntimeError as exc:

@@ -1,90 +1,39 @@
 """LMGC90 engine plugin: non-smooth contact dynamics through ``compas_lmgc90``.
 
-LMGC90 (CNRS / Université de Montpellier, CeCILL licence) is a discrete element
-code of the *non-smooth contact dynamics* family (Moreau–Jean): rigid bodies,
-unilateral contact and Coulomb friction solved at the velocity level by
-nonlinear Gauss–Seidel (NLGS) once per time step, impacts as velocity jumps.
-Its ``IQS_CLB`` law ("inelastic quasi-shock, Coulomb") is a perfectly plastic
-impact with friction: exactly Housner's assumptions, with no contact stiffness
-or damping to calibrate. ``compas_lmgc90`` (MIT licence, alpha) is the Block
-Research Group's binding; its wheel carries LMGC90's Fortran core compiled in.
+LMGC90 (CNRS / Université de Montpellier, CeCILL licence) is a discrete element code of
+the *non-smooth contact dynamics* family (Moreau–Jean): rigid bodies, unilateral
+contact and Coulomb friction solved at the velocity level by nonlinear Gauss–Seidel
+(NLGS) once per time step, impacts as velocity jumps. Its ``IQS_CLB`` law ("inelastic
+quasi-shock, Coulomb") is a perfectly plastic impact with friction: Housner's
+assumptions, with no contact stiffness or damping to calibrate. ``compas_lmgc90`` (MIT
+licence) is the Block Research Group's binding; its wheel carries LMGC90's Fortran core.
 
-Scene: every block is a convex polyhedron (its x–z profile, chamfers included,
-extruded over its depth), tilted by θ0 about its pivot; the base is a box whose
-top face is z = 0 with all six velocities driven. The binding fixes, and this
-plugin therefore cannot change: gravity (0, 0, −9.81) m/s² (a scenario with
-another ``g`` is unsupported), one contact law for every pair (the scenario's
-friction; a different interface friction is unsupported), a restitution of 0
-(``IQS_CLB``: a scenario with restitution > 0 is unsupported), the NLGS
-parameters (tolerance 1.666e-4 in the ``QM/16`` norm, relaxation 0.1, 50
-sweeps between checks, at most 25 000 sweeps per step) and the contact
-detection (``STO``: contact points where two facing polygons overlap).
+Each block is a convex polyhedron (its x–z profile, chamfers included, extruded over
+its depth) at its pose; the base is a box whose top face is z = 0 and each fixed
+support one more body, all with their six velocities driven. LMGC90 takes a driven
+velocity as a table fixed before pre-processing, so the whole base velocity along x
+(the only axis applied) is handed over at build; the θ-method with θ = 1/2 then moves
+the base by the trapezoidal rule of the exact velocities. Poses are read from each
+body's centre of inertia and principal frame. The binding fixes gravity (9.81 m/s²),
+one contact law for every pair, a restitution of 0 and the NLGS parameters; other
+values are unsupported. Its face-to-face tolerance (2.56°, under which a tilted block
+loses its contact) is reset through LMGC90's own exported setter, called via ctypes
+after ``Solver()`` and before ``preprocess()``; a build without that symbol lists the
+engine as unavailable. Creating a ``Solver`` resets LMGC90's Fortran state, so runs in
+one process repeat to the bit.
 
-Any geometry (:class:`~rockbench.geometry.Geometry`): every block, rectangular
-or a convex prism, is its polyhedron at its pose (the profile turned by the pose angle
-about its centroid); each fixed support is one more body with all six velocities driven,
-its x–z polygon extruded over twice the deepest block's depth, with the base's velocity
-table (so it moves with the base). One law for every pair, so an interface friction
-other than the base's is unsupported. LMGC90 computes each body's inertia from its
-polyhedron and reports the principal frame, whatever it is: the pose read back is that
-frame's change applied to the block's orientation, so a prism with a product of inertia
-reads back its own pose (9e-12 rad on the inclined test scene; the same prism as a
-turned Block rocks 1.4e-10 rad apart). Measured (issue 18, accurate preset, 0.5 s): the
-5-drum column, the parapet, the 6 × 3 wall and the t/R = 0.2 arch stay at rest to
-1.5e-9–1.7e-8 λ and 1e-10–7.3e-9 m (CPU 0.6, 0.3, 17, 4 s); the arch on its supports
-under a pulse at half its collapse acceleration ends within 3.7e-7 of the base's
-displacement. The tilting table is the base acceleration ramp, i.e. a driven base
-velocity (gravity stays the binding's): at rates 0.05 and 0.025 /s the parapet moves at
-α = 0.1311 / 0.1289 and the 5-drum column at 0.2487 / 0.2456 (+3.1 % and +2.3 % of
-the LP's 0.125 and 0.24; ≈ +0.1 % extrapolated to rate 0), with the LP mechanism
-(66 s CPU for the four runs).
+Presets and knobs:
 
-Face-to-face tolerance (the one thing changed behind the binding's back): STO
-pairs only faces whose normals are within ``f2f_tol`` of anti-parallel (on
-1 − cos of their angle). The binding sets 1e-3 (2.56°) and does not expose
-it, so a block tilted more than 2.56° has no contact at all and falls through
-the ground (B0 at 0.5 λ = 5.65°: measured, tested). LMGC90's own setter
-``set_f2f_tol_PRPRx`` is an exported symbol of the binding's extension module;
-the plugin calls it through ctypes after ``Solver()`` (which resets it) and
-before ``preprocess()``. A build without that symbol lists the engine as
-unavailable with the reason.
+* ``accurate`` (the defaults): Δt 0.1 ms.
+* ``fast``: Δt 1 ms.
+* ``timestep``, ``theta`` (θ-method), ``alert`` (contact detection distance),
+  ``f2f_tol`` (face-to-face tolerance).
 
-Base driving: LMGC90 takes a driven velocity as an evolution table fixed before
-pre-processing, so the whole base velocity history is handed over at build: the
-exact u̇_g along x (``self.drive``) at every step time until the base stops, 0 afterwards
-(:meth:`_drive_base` has nothing left to do). The θ-method moves a driven
-degree of freedom by dt ((1 − θ) v_i + θ v_{i+1}): with θ = 1/2 the trapezoidal
-rule of the exact velocities (a 5 Hz / 4 mm pulse leaves the base within 2e-10 m
-of u_g at its end).
+Known limits: its impacts keep more energy than Housner's η, the more the larger the
+amplitude, whatever the step, θ or contact law; stacks converge slowly on pulses.
 
-Reading poses: LMGC90 reports each body's centre of inertia and its principal
-inertia frame (rows: the axes in world components); the rotation since the
-build is the frame's change, applied to the block's initial orientation.
-
-One simulation per process: LMGC90 keeps its model in Fortran module state,
-but compas_lmgc90 ≥ 0.1.11 resets all of it when a ``Solver`` is created, so
-runs in one process repeat to the bit whatever ran before (tested) and warm
-workers may be reused.
-
-Measured (compas_lmgc90 0.1.11, CPython 3.11, x86_64; ``rockbench compare --suite
-paper-free`` and ``--suite paper-single-pulse`` with ``--engine lmgc90 --presets
-accurate,fast``; CPU seconds on a shared 2-core machine): the first swing of free rocking
-is exact (first impacts within 0.003 % on all ten cases), but LMGC90's impact, as solved
-here, keeps more energy than Housner's η, increasingly with the amplitude and the same at
-Δt 0.2, 0.1 and 0.05 ms, with θ = 0.5 or 1, ``GAP_SGR_CLB`` instead of ``IQS_CLB`` and any
-depth, so it is neither the step nor the 3D model (perhaps the binding's fixed NLGS
-relaxation 0.1). From 0.2 λ it is Housner's (``accurate``: max |θ − θ_ref| 0.0015–0.0022 λ
-over 20 s, impacts within 0.5 %); from 0.5 λ the 2nd and 3rd impacts are 0.4–0.6 % late
-on B0 (0.018 λ up to the 3rd impact, 0.029 λ over 20 s, effective η 0.945 against 0.942)
-and 1.5–3.6 % on B1–B3 (0.034–0.037 λ; B2 η 0.716 against 0.700); from 0.99 λ 5.7–9.1 % late
-(0.21–0.29 λ). Single #2 pulse peaks: −0.45 to −0.15 % (``accurate``), −3.3 to −1.8 %
-(``fast``). The paper's two-block stack under its eight pulses (``paper-stack-pulse``):
-peaks within −4.9 to +1.8 % (bottom) and −6.0 to −0.3 % (top) of the two-block model
-at ``accurate`` (−4.9 % at 3.3 Hz / 4 mm, an uplift ratio of 1.12), up to −55 % at
-``fast``. Cost per 20 s of B0: 30 s CPU (``accurate``, Δt 0.1 ms), 4.6 s (``fast``,
-Δt 1 ms); the plugin's own overhead is within the noise of a raw loop of the same calls.
-``fast`` keeps the 0.2 λ cases within 0.018 λ and the 0.5 λ ones within 0.025 λ, but
-brings B0 to rest 2 s early (0.16 λ over 20 s).
+See :doc:`the engine's page </engines/lmgc90>` in the documentation for its measured
+accuracy and cost.
 """
 
 from __future__ import annotations
@@ -222,7 +171,8 @@ class Lmgc90Engine(Engine):
                 "coefficient); scenario has a different interface friction")
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
-        s: Lmgc90Settings = settings  # type: ignore[assignment]
+        assert isinstance(settings, Lmgc90Settings)  # resolve_settings made it one
+        s = settings
         mod = _solver_module()
         dt = float(s.timestep)
         drive = self.drive

@@ -1,60 +1,41 @@
 """MuJoCo engine plugin: rigid blocks as free bodies on a box base driven along x.
 
-Scene (built as an MJCF string from the Scenario)
--------------------------------------------------
-* Each block is a body with a free joint, its frame at the centroid, with the
-  explicit mass and principal inertia of :attr:`Block.inertia`. Its collision
-  shape is a ``box`` geom, or, when chamfered, a ``mesh`` geom made of the
-  :meth:`Block.profile` polygon extruded along y (MuJoCo collides with the
-  convex hull; multi-point convex collision ("multiccd") stays enabled so that a
-  flat face gives several contact points).
-* The ground is a box whose top face is the plane z = 0. In free rocking it is
-  a static world geom. Under base excitation it is a heavy body on a slide joint
-  along x, driven kinematically: before every step its position and velocity are
-  overwritten with the excitation's displacement/velocity and a force gives it
-  exactly the acceleration that brings it to the next step's velocity. (A mocap
-  body would not drag the blocks through friction: MuJoCo treats it as static
-  in the contact Jacobian.) After the excitation the slide joint gets a huge
-  (implicitly integrated) damping, which holds the base still so that steps
-  are batched in C.
-* Contacts: condim 3, Coulomb friction from the scenario (an interface
-  friction on the blocks' geoms, the base's friction on the base geom, whose
-  higher ``priority`` makes it rule its contacts with the blocks), pyramidal cone
-  by default, ``solref`` time constant = ``timeconst_factor`` × time step and damping
-  ratio ``dampratio``, ``solimp`` tight. MuJoCo has no restitution coefficient: a
-  scenario restitution e > 0 is mapped onto the damping ratio of the contact spring,
-  ζ = −ln e / sqrt(π² + ln² e) (the linear spring–damper whose bounce is e);
-  this is approximate because the contact also has an impedance (solimp).
-* Why ζ = 3 and not critical damping for a plastic impact: a contact is found
-  only once the corner has penetrated, up to one step's travel v·dt. With
-  τ = 2 dt the damping B = 2/τ stops the approach in about one step, but the
-  spring K = 1/(τζ)² then pushes the corner out at about K·v·dt² = v/(4ζ²): a
-  rebound e ≈ 0.25 at ζ = 1 whatever the step. It made the upper block of a stack
-  hop off its new pivot at every interface impact (measured on
-  stack-sine-5.0hz-4mm: 7.6e-5 m of interface slip in one impact, 1e-4 m gaps) and
-  the stack sinusoids never converged as dt shrank. ζ = 3 (e ≈ 0.03) keeps the
-  corner down; the penetration of that step (≈ 8 µm) is pushed out in a few ms.
-* Why the pyramidal cone: MuJoCo's convex (regularised) contact lets a sliding
-  contact separate at a rate that grows with μ·B·|v_slip|; with the elliptic cone
-  a block sliding on the base hopped (in contact 4–20 % of the time on
-  slide-single-pulse-3.0hz-8mm-mu0.10, a 5.4 % slip error) and rocked to 0.09 λ on
-  the 5 Hz / 6 mm case. The pyramidal cone (with ``impratio`` 10, which makes its
-  facets harder) gives Coulomb's mean friction there (0.09 % slip error) and is cheaper.
-* Sliding blocks chatter with either cone (measured, MuJoCo 4.0). The reference
-  acceleration of a pyramid facet is −B·(v_n − μ|v_t|) − K·r (r: distance), B·dt ≈ 1 at
-  τ = 2 dt, so a contact step leaves a sliding contact opening at v_n ≈ μ|v_t|: the
-  block flies 2 v_n/g and lands again (slide-single-sine-3.0hz-8mm-mu0.15 at 0.3 s:
-  one contact step in 26, of 26 mg; on the 3 Hz / 8 mm pulse in contact 10 % of the
-  sliding steps, pyramidal and elliptic alike). The mean friction is μ·mg, so a slide
-  follows the Coulomb slider, but not through a near-stick, and the one-edge impulses
-  rock the block (that sinusoid: 0.2 λ). An interface that must carry exactly μN while
-  the stack slides (slide-stack-pulse-5.0hz-4mm-mu0.10) gets 0.87 μN on average and
-  slips 2.1 mm. No setting tried keeps both within 1 % of the Coulomb slider:
-  ``impratio`` 1–1000, no-slip passes (to 100, tolerance 0), ``timeconst_factor`` 4–8,
-  ``dampratio`` 1, steps down to 25 µs, the discrete integrator, an elliptic cone with a
-  softer friction reference (per-pair ``solreffriction``: no hop, but the friction then
-  stays below μN until the contact slips fast).
-* No damping, no sleeping.
+The scene is an MJCF string built from the scenario. Each block is a body with a free
+joint, its frame at the centroid, with the block's mass and inertia; its collision
+shape is a ``box`` geom, or a ``mesh`` geom of its prism for a chamfered block or a
+convex prism (MuJoCo collides with the convex hull; ``multiccd`` gives a flat face
+several contact points). The ground is a box whose top face is z = 0: a static world
+geom in free rocking, otherwise a heavy body on a slide joint along x whose position
+and velocity are overwritten with the base motion's before every step, and a force
+gives it exactly the acceleration to the next step's velocity (a mocap body would not
+drag the blocks through friction). Once the motion ends a huge damping holds it still,
+so that steps are batched in C. The base motion is applied along x only. Contacts are
+condim 3 with Coulomb friction (an interface friction on the blocks' geoms, the base's
+on the base geom, whose ``priority`` rules its contacts) and a tight ``solimp``. No
+damping, no sleeping.
+
+MuJoCo's contacts are soft: ``solref`` has the time constant ``timeconst_factor`` × Δt
+and the damping ratio ``dampratio``. A contact is found only once a corner has
+penetrated, and at τ = 2 Δt the spring pushes a landing corner out with e ≈ 1/(4ζ²),
+so a plastic impact needs ζ ≈ 3, not critical damping. MuJoCo has no restitution
+coefficient: a scenario restitution e > 0 is mapped onto ζ = −ln e / sqrt(π² + ln² e).
+The pyramidal cone (with ``impratio`` 10) is the default because the elliptic cone
+lets a sliding block hop.
+
+Presets and knobs:
+
+* ``accurate`` (the defaults): Δt 0.1 ms, τ = 2 Δt, ζ = 3, pyramidal cone, Newton
+  solver.
+* ``fast``: the same contact at Δt 1 ms; the assembly studies' preset.
+* ``timestep``, ``timeconst_factor``, ``dampratio``, ``solimp_*``, ``cone``,
+  ``impratio``, the solver's ``iterations`` and ``tolerance``, ``noslip_iterations``.
+
+Known limits: sliding contacts chatter with either cone, so a slide follows the Coulomb
+slider on average but not through a near-stick, and a stack interface that must carry
+exactly μN carries less.
+
+See :doc:`the engine's page </engines/mujoco>` in the documentation for its
+calibration, measured accuracy and cost.
 """
 
 from __future__ import annotations
@@ -136,15 +117,8 @@ class MujocoSettings(EngineSettings):
 
     Notes
     -----
-    Calibrated with ``benchmarks/calibrate_mujoco.py`` (free rocking B0–B3, six
-    sine pulses): ``accurate`` (dt 0.1 ms, τ = 2 dt, ζ = 3, pyramidal cone) stays
-    below 1.8e-3 λ and 0.10 % on pulse peaks; ``fast`` (the same contact at dt 1 ms)
-    stays within 0.020 λ on free rocking, 0.086 λ and 0.85 % on the pulses and 9.2 % on
-    the stack pulses' peaks (the former fast, τ = 4 dt, ζ = 1, elliptic cone: 0.031 λ,
-    0.11 λ, 1.1 % and 21 %, at 1.24× the cost; ``benchmarks/preset_pareto.py``). On the
-    paper's stack (``benchmarks/stack_convergence.py``) ``accurate`` keeps both peaks
-    of every stack pulse within 0.7 % and of the two well-posed sinusoids within 1.7 %,
-    with < 2e-5 m of interface slip.
+    The presets' calibration and their measured accuracy are on
+    :doc:`the engine's page </engines/mujoco>` in the documentation.
     """
 
     timestep: float = 1.0e-4

@@ -14,8 +14,9 @@ Impacts lose energy in dashpots (ζ = ``damping_ratio``) that act only beyond a
 compression ``damping_onset`` · g/ω_c², so that a pivot lifts off freely. A column of
 one or two blocks (single blocks, the paper's stack, parapets) has contact nodes that
 turn with the blocks; any other geometry (taller drum columns, walls, arches) has
-fixed-orientation joints and starts from a static gravity analysis. The base motion (along x only) is a uniform excitation: the
-base nodes are fixed, every block gets the inertial load −m ü_g(t) and the reported
+fixed-orientation joints and starts from a static gravity analysis. The base motion
+(along x only) is a uniform excitation: the base nodes are fixed, every block gets the
+inertial load −m ü_g(t) and the reported
 positions add u_g(t). Newmark (or HHT, generalized-α) integration, Newton–Raphson with
 Krylov–Newton and fixed-iteration fallbacks (counted in ``unconverged_steps``).
 

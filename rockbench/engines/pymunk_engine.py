@@ -1,56 +1,35 @@
 """pymunk (Chipmunk2D) engine plugin: planar rocking in the x–z plane.
 
 pymunk is a 2D engine; its (x, y) plane is our (x, z) plane. Its angle is
-counter-clockwise positive, while our θ (rotation about +y) is positive when a
-block's top moves toward +x (clockwise in pymunk's plane), so θ = −angle and the
-returned quaternion is a rotation θ about +y: (cos θ/2, 0, sin θ/2, 0).
+counter-clockwise positive, while our θ (about +y) is positive when a block's top moves
+toward +x, so θ = −angle and the returned quaternion is (cos θ/2, 0, sin θ/2, 0).
 
-Scene: one dynamic body per block with a convex :class:`pymunk.Poly` from
-:meth:`Block.profile` (chamfers included, radius 0), mass ``Block.m`` and moment
-``Block.inertia[1]`` (the depth only scales the mass, so any planar stack is
-exact), and a KINEMATIC base body carrying a box whose top face is z = 0.
+Each block is a dynamic body with a convex :class:`pymunk.Poly` of
+:meth:`~rockbench.geometry.Block.profile` (chamfers included, radius 0), the block's
+mass and moment about y (the depth only scales the mass, so any planar stack is exact);
+the base is a KINEMATIC body carrying a box whose top face is z = 0. The base motion is
+applied along x and z (``Capabilities.base_axes`` is ``"xz"``): before each step from t
+the base gets the velocity u̇_g(t + dt/2) (midpoint rule, the contact solver sees the
+step's mean velocity) and its position is reset to the exact u_g(t), so no drift
+accumulates; ``_advance_driven`` drives and steps in one loop.
+Chipmunk's ``collision_slop`` is 0 here (its default 0.1 m lets shapes sink), sleeping is
+off and ``damping`` is 1 (none). Chipmunk multiplies the friction and elasticity of two
+shapes, so every shape gets coefficients whose products are the scenario's
+(:func:`~rockbench.engines.friction.product_frictions` for an interface friction).
 
-Base driving (x and z: ``Capabilities.base_axes`` is ``"xz"``): before each
-step starting at t the base gets the velocity u̇_g(t + dt/2) (midpoint rule: the
-position integrated by Chipmunk over the step is then exact to O(dt³), and the
-contact solver sees the mean velocity of the step). Chipmunk integrates a
-kinematic body's position as p += v dt, so the midpoint errors would accumulate
-to O(dt²) drift; the position is therefore reset to the exact u_g(t) at every
-step start. The vertical component is applied in exactly the same way (pymunk's
-y is our z); a base still along z keeps the literal 0 of the horizontal-only
-loop. The series are precomputed once from :attr:`~Engine.drive` (vectorised);
-:meth:`_advance_driven` drives and steps in one tight loop. Tested: a block on a
-base that only moves vertically rides it (z − u_z constant, no rocking), and a
-block under a horizontal and a vertical pulse at once follows the Housner
-reference with the vertical acceleration within the accuracy of a horizontal one.
+Presets and knobs:
 
-Pitfalls handled (see docs/engine-notes.md): Chipmunk's default
-``collision_slop`` of 0.1 m lets shapes sink 0.1 m (set to 0 by default here);
-sleeping is disabled; ``damping`` is 1 (none); Chipmunk multiplies the friction
-and elasticity of the two shapes in contact, so every shape gets the square
-root of the scenario's coefficient and each contact pair sees exactly
-``scenario.contact.friction`` and ``scenario.contact.restitution``. With an
-interface friction μ_if ≠ μ (:func:`~rockbench.engines.friction.product_frictions`),
-a column's blocks alternate 1 and μ_if over a base of μ; any other geometry's
-blocks, which may touch blocks and the base at once, each get √μ_if over a base
-and supports of μ/√μ_if (μ_if = 0 < μ is then unsupported). Tested: two blocks
-side by side on the base stay put at 0.2 g on μ = 0.3 whatever μ_if, and slide as
-the exact Coulomb slider at 0.5 g on μ = 0.15.
+* ``accurate`` (the defaults): dt 0.025 ms, the step at which the paper's stacks
+  converge.
+* ``fine``: dt 0.02 ms (the stack sinusoids closer).
+* ``single``: dt 0.1 ms, enough for single blocks; the assembly studies' preset.
+* ``fast``: dt 1 ms, 20 iterations.
+* ``timestep``, ``iterations``, ``collision_slop``, ``collision_bias``.
 
-Calibration (``benchmarks/calibrate_pymunk.py``, pymunk 7.3, free rocking B0–B3
-over 20 s and the six Single #2 pulses): ``accurate`` (dt 0.1 ms) max
-|θ − θ_ref| ≤ 0.0019 λ, impact times within 0.1 %, pulse peaks within 0.11 %;
-``fast`` (dt 1 ms) ≤ 0.015 λ, impact times within 0.42 %, peaks within 1.4 %.
-dt 0.2 ms already gives 0.0076 λ on B0, hence 0.1 ms was enough for single blocks.
-The paper stack needs 0.025 ms (``benchmarks/stack_convergence.py``): at 0.1 ms the
-6.5 Hz / 2 mm pulse's top peak is 2.4 % low, at 0.05 ms the 5 Hz / 2 mm sinusoid's
-8.3 % high; at 0.025 ms every stack pulse is within 0.5 % and both well-posed
-sinusoids within 3.2 % (0.02 ms: 0.52 % and 1.7 %; 0.01 ms: 0.15 % and 1.2 %).
-``accurate`` is dt 0.025 ms, the cheapest step of ``benchmarks/preset_pareto.py``'s grid
-that keeps the accurate bounds (the stack sines within 5 %); at 0.02 ms it cost 1.24×
-as much (16.5 against 13.2 CPU s over the 24 calibration cases). ``fine`` keeps 0.02 ms
-(the sines within 1.7 %, 0.004 λ up to their third impact against 0.032 λ), ``single``
-the 0.1 ms that single blocks need, at a quarter of accurate's cost.
+Known limits: 2D only; a base motion along y is refused.
+
+See :doc:`the engine's page </engines/pymunk>` in the documentation for its
+calibration, measured accuracy and cost.
 """
 
 from __future__ import annotations
@@ -154,7 +133,7 @@ class PymunkEngine(Engine):
     Settings: ClassVar[type[EngineSettings]] = PymunkSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
-        # calibrated with benchmarks/calibrate_pymunk.py (figures in the module docstring)
+        # its calibration: the engine's page; reproduce with `rockbench calibrate pymunk`
         "fast": {"timestep": 1e-3, "iterations": 20},
         # the former accurate: the stack sinusoids within 1.7 % instead of 3.2 %, at 1.24×
         "fine": {"timestep": 2e-5},
@@ -230,7 +209,8 @@ class PymunkEngine(Engine):
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
         pymunk = _pymunk()
-        s: PymunkSettings = settings  # type: ignore[assignment]
+        assert isinstance(settings, PymunkSettings)  # resolve_settings made it one
+        s = settings
         dt = float(s.timestep)
         space = pymunk.Space()
         space.gravity = (0.0, -scenario.g)

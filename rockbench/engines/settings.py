@@ -10,7 +10,7 @@ import math
 import types
 import typing
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, TypeVar
 
 from rockbench.errors import RockbenchError
 
@@ -136,6 +136,9 @@ _KIND_NAMES = {bool: "a boolean (true/false)", int: "an integer", float: "a numb
                str: "a string"}
 
 
+_SettingsT = TypeVar("_SettingsT", bound="EngineSettings")
+
+
 @dataclasses.dataclass(frozen=True)
 class EngineSettings:
     """Base class of every engine's knobs.
@@ -144,7 +147,7 @@ class EngineSettings:
     calibrated defaults. Field types drive the conversion of ``--set`` strings.
     """
 
-    def replace(self, **overrides: Any) -> EngineSettings:
+    def replace(self: _SettingsT, **overrides: Any) -> _SettingsT:
         """A copy with some knobs changed; values may be strings (converted by type)."""
         hints = typing.get_type_hints(type(self))
         names = {f.name for f in dataclasses.fields(self)}

@@ -40,6 +40,7 @@ from rockbench.geometry import (
     Prism,
     Support,
     running_bond_wall,
+    single,
     voussoir_arch,
 )
 from rockbench.geometry.polygon import penetration, rotate
@@ -86,7 +87,8 @@ class Tolerances:
 
 
 def _scenario(name: str, geometry: Geometry | Block, **kw: Any) -> Scenario:
-    return Scenario(name=f"conformance-{name}", geometry=geometry, **kw)
+    geo = geometry if isinstance(geometry, Geometry) else single(geometry)
+    return Scenario(name=f"conformance-{name}", geometry=geo, **kw)
 
 
 def _lam(scenario: Scenario) -> float:

@@ -292,7 +292,7 @@ def _classify(n: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.
     has_yes = z > 0
     hi_no = np.where(has_no, levels, -1).max(axis=-1)
     lo_yes = np.where(has_yes, levels, n.shape[-1]).min(axis=-1)
-    return hi_no, lo_yes, has_yes.any(axis=-1)
+    return hi_no, lo_yes, np.asarray(has_yes.any(axis=-1))
 
 
 def _degenerate(data: ExceedanceData) -> FragilityFit | None:

@@ -89,7 +89,10 @@ class Block:
     @property
     def m(self) -> float:
         """Mass in kg."""
-        return self.mass if self.mass is not None else self.density * self.volume  # type: ignore[operator]
+        if self.mass is not None:
+            return self.mass
+        assert self.density is not None  # exactly one of the two (_mass_or_density)
+        return self.density * self.volume
 
     @property
     def b(self) -> float:
@@ -234,7 +237,10 @@ class Prism:
     @property
     def m(self) -> float:
         """Mass in kg."""
-        return self.mass if self.mass is not None else self.density * self.volume  # type: ignore[operator]
+        if self.mass is not None:
+            return self.mass
+        assert self.density is not None  # exactly one of the two (_mass_or_density)
+        return self.density * self.volume
 
     @property
     def centroid(self) -> np.ndarray:

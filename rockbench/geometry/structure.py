@@ -30,7 +30,7 @@ import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -350,7 +350,8 @@ class Column:
     @property
     def blocks(self) -> tuple[Block, ...]:
         """The blocks, bottom first."""
-        return self.geometry.bodies  # type: ignore[return-value]
+        # every body is a Block: Geometry.column builds a Column only then
+        return cast("tuple[Block, ...]", self.geometry.bodies)
 
     def __len__(self) -> int:
         return len(self.geometry.bodies)

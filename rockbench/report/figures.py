@@ -64,7 +64,7 @@ def method_styles(methods: Sequence[Method]) -> dict[str, MethodStyle]:
         if m.engine not in engines:
             engines.append(m.engine)
         presets.setdefault(m.engine, []).append(m.label)
-    out = {}
+    out: dict[str, MethodStyle] = {}
     markers = "o^sDv"
     ci = 0
     for eng in engines:
@@ -73,12 +73,12 @@ def method_styles(methods: Sequence[Method]) -> dict[str, MethodStyle]:
         else:
             color = _COLORS[ci % len(_COLORS)]
             ci += 1
-        for k, m in enumerate(presets[eng]):
+        for k, label in enumerate(presets[eng]):
             ref = eng == REFERENCE
-            out[m] = MethodStyle(color=color, linestyle=_DASHES[k % len(_DASHES)],
-                                 linewidth=2.2 if ref else 1.3,
-                                 marker="o" if ref else markers[k % len(markers)],
-                                 zorder=1 if ref else 3)
+            out[label] = MethodStyle(color=color, linestyle=_DASHES[k % len(_DASHES)],
+                                     linewidth=2.2 if ref else 1.3,
+                                     marker="o" if ref else markers[k % len(markers)],
+                                     zorder=1 if ref else 3)
     return out
 
 
@@ -208,7 +208,7 @@ def time_history_figure(path: Path, scenario: Scenario, trajs: Mapping[str, Traj
 def peak_input_figure(path: Path, title: str, scenarios: Sequence[Scenario],
                       methods: Sequence[str], rows: Mapping[tuple[str, str], RunResult],
                       styles: Mapping[str, MethodStyle],
-                      published: Sequence[tuple[int, str, Sequence[float | str], Scenario]] = (),
+                      published: Sequence[tuple[int, str, float, Scenario]] = (),
                       ) -> Path:
     """max |θ|/λ against the normalised input acceleration ü_g/(g tan λ), per block.
 

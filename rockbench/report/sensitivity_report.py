@@ -53,7 +53,7 @@ def sensitivity_table(number: int, scenario: Scenario, variations: Sequence[Vari
             val = f"{v.value:g} {knob.unit}".strip() if isinstance(v.value, float) else \
                 f"{v.value} {knob.unit}".strip()
             setting = Cell(v.mapping, note=t.note(v.note) if v.note else 0, title=v.note)
-            head = [Cell(knob.title, kind="head"), val, v.engine, setting]
+            head: list[Cell | str] = [Cell(knob.title, kind="head"), val, v.engine, setting]
             if r is None:
                 t.add_row([*head, Cell("not run", kind="crashed"), "", "", "", ""])
                 continue

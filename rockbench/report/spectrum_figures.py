@@ -106,7 +106,7 @@ def _engine_style(k: int) -> dict[str, Any]:
 def _class_index(codes: np.ndarray) -> np.ndarray:
     idx = np.full(codes.shape, len(_CLASSES) - 1, dtype=int)
     for k, (cs, _, _) in enumerate(_CLASSES[:-1]):
-        for c in cs:  # type: ignore[union-attr]
+        for c in cs or ():  # only the last class has no codes
             idx[codes == c] = k
     return idx
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 from rockbench.errors import UnknownScenario
@@ -21,7 +22,7 @@ from rockbench.geometry import (
     stack,
     voussoir_arch,
 )
-from rockbench.scenarios.excitation import SinePulse, Sinusoid
+from rockbench.scenarios.excitation import Excitation, SinePulse, Sinusoid
 from rockbench.scenarios.files import load_scenario
 from rockbench.scenarios.model import Contact, Scenario
 from rockbench.scenarios.records import record_scenarios
@@ -61,35 +62,53 @@ def _hzmm(f: float, a_mm: int) -> str:
     return f"{f:.1f}hz-{a_mm}mm"
 
 
+# The catalog holds builders (functools.partial of these), so that every lookup
+# builds a fresh scenario.
+def _free(name: str, key: str, size: tuple[float, float, float], tilt: float) -> Scenario:
+    w, d, h = size
+    return Scenario(
+        name=name, geometry=single(Block(w, d, h, mass=1.0)), initial_tilt=tilt,
+        duration=FREE_DURATION, output_rate=RATE,
+        description=f"{key.upper()} free rocking from {tilt} λ ({PAPER}, Section 4)",
+    )
+
+
+def _single_driven(name: str, kind: str, exc_cls: type[SinePulse | Sinusoid], f: float,
+                   a: int, dur: float) -> Scenario:
+    return Scenario(
+        name=name, geometry=single(SINGLE2), contact=Contact(friction=1.0),
+        excitation=exc_cls(frequency=f, amplitude=a / 1000.0), duration=dur,
+        output_rate=RATE,
+        description=f"Single #2 block, {f} Hz / {a} mm {kind} ({PAPER}, Section 5)",
+    )
+
+
+def _stack_driven(name: str, kind: str, exc_cls: type[SinePulse | Sinusoid], f: float,
+                  a: int, dur: float) -> Scenario:
+    return Scenario(
+        name=name, geometry=STACK2, contact=Contact(friction=1.0),
+        excitation=exc_cls(frequency=f, amplitude=a / 1000.0), duration=dur,
+        output_rate=RATE,
+        description=f"two stacked blocks, {f} Hz / {a} mm {kind} ({PAPER}, Section 6)",
+    )
+
+
 def _build() -> dict[str, Callable[[], Scenario]]:
     cat: dict[str, Callable[[], Scenario]] = {}
-    for key, (w, d, h) in FREE_BLOCKS.items():
+    for key, size in FREE_BLOCKS.items():
         tilts = (0.5,) if key == "b0" else FREE_TILTS
         for tilt in tilts:
             name = f"free-{key}" if key == "b0" else f"free-{key}-{tilt}"
-            cat[name] = lambda name=name, w=w, d=d, h=h, tilt=tilt, key=key: Scenario(
-                name=name, geometry=single(Block(w, d, h, mass=1.0)), initial_tilt=tilt,
-                duration=FREE_DURATION, output_rate=RATE,
-                description=f"{key.upper()} free rocking from {tilt} λ ({PAPER}, Section 4)",
-            )
-    for kind, exc_cls, dur in (("pulse", SinePulse, PULSE_DURATION),
-                               ("sine", Sinusoid, SINE_DURATION)):
+            cat[name] = partial(_free, name, key, size, tilt)
+    drives: tuple[tuple[str, type[SinePulse | Sinusoid], float], ...] = (
+        ("pulse", SinePulse, PULSE_DURATION), ("sine", Sinusoid, SINE_DURATION))
+    for kind, exc_cls, dur in drives:
         for f, a in SINGLE_CASES:
             name = f"single-{kind}-{_hzmm(f, a)}"
-            cat[name] = lambda name=name, f=f, a=a, exc_cls=exc_cls, dur=dur, kind=kind: Scenario(
-                name=name, geometry=single(SINGLE2), contact=Contact(friction=1.0),
-                excitation=exc_cls(frequency=f, amplitude=a / 1000.0), duration=dur,
-                output_rate=RATE,
-                description=f"Single #2 block, {f} Hz / {a} mm {kind} ({PAPER}, Section 5)",
-            )
+            cat[name] = partial(_single_driven, name, kind, exc_cls, f, a, dur)
         for f, a in STACK_CASES:
             name = f"stack-{kind}-{_hzmm(f, a)}"
-            cat[name] = lambda name=name, f=f, a=a, exc_cls=exc_cls, dur=dur, kind=kind: Scenario(
-                name=name, geometry=STACK2, contact=Contact(friction=1.0),
-                excitation=exc_cls(frequency=f, amplitude=a / 1000.0), duration=dur,
-                output_rate=RATE,
-                description=f"two stacked blocks, {f} Hz / {a} mm {kind} ({PAPER}, Section 6)",
-            )
+            cat[name] = partial(_stack_driven, name, kind, exc_cls, f, a, dur)
     return cat
 
 
@@ -183,12 +202,17 @@ SLIDING_CASES = (
 def _sliding() -> dict[str, Callable[[], Scenario]]:
     cat: dict[str, Callable[[], Scenario]] = {}
     for name, geo, exc, mu, dur in SLIDING_CASES:
-        cat[name] = lambda name=name, geo=geo, exc=exc, mu=mu, dur=dur: Scenario(
-            name=name, geometry=geo, contact=Contact(friction=mu), excitation=exc,
-            duration=dur, output_rate=RATE,
-            description=f"low friction μ = {mu:g}: slides without rocking (Coulomb sliding)",
-        )
+        cat[name] = partial(_sliding_case, name, geo, exc, mu, dur)
     return cat
+
+
+def _sliding_case(name: str, geo: Geometry, exc: Excitation, mu: float,
+                  dur: float) -> Scenario:
+    return Scenario(
+        name=name, geometry=geo, contact=Contact(friction=mu), excitation=exc,
+        duration=dur, output_rate=RATE,
+        description=f"low friction μ = {mu:g}: slides without rocking (Coulomb sliding)",
+    )
 
 
 _CATALOG.update(_sliding())
@@ -206,13 +230,18 @@ INTERFACE_SLIDING_CASES = (
 def _interface_sliding() -> dict[str, Callable[[], Scenario]]:
     cat: dict[str, Callable[[], Scenario]] = {}
     for name, exc, mu, mu_i, dur in INTERFACE_SLIDING_CASES:
-        cat[name] = lambda name=name, exc=exc, mu=mu, mu_i=mu_i, dur=dur: Scenario(
-            name=name, geometry=STACK2, contact=Contact(friction=mu, interface_friction=mu_i),
-            excitation=exc, duration=dur, output_rate=RATE,
-            description=f"interface friction μᵢ = {mu_i:g} under base friction μ = {mu:g}: "
-                        "the upper block slides on the lower one (Coulomb sliding)",
-        )
+        cat[name] = partial(_interface_sliding_case, name, exc, mu, mu_i, dur)
     return cat
+
+
+def _interface_sliding_case(name: str, exc: Excitation, mu: float, mu_i: float,
+                            dur: float) -> Scenario:
+    return Scenario(
+        name=name, geometry=STACK2, contact=Contact(friction=mu, interface_friction=mu_i),
+        excitation=exc, duration=dur, output_rate=RATE,
+        description=f"interface friction μᵢ = {mu_i:g} under base friction μ = {mu:g}: "
+                    "the upper block slides on the lower one (Coulomb sliding)",
+    )
 
 
 _CATALOG.update(_interface_sliding())
@@ -221,11 +250,10 @@ _CATALOG.update(_interface_sliding())
 #: Masonry assemblies at rest on a still base: name → builder. The families are
 #: parametrised (rockbench.geometry.builders); the catalog keeps a few members each.
 ASSEMBLY_CASES: dict[str, Callable[[], Geometry]] = {
-    **{f"column-{n}drums": (lambda n=n: drum_column(n)) for n in (3, 5, 10)},
-    **{f"parapet-offset{e:.2f}": (lambda e=e: parapet(e)) for e in (0.0, 0.25)},
-    **{f"wall-{c}x{b}": (lambda c=c, b=b: running_bond_wall(c, b)) for c, b in ((6, 3), (10, 3))},
-    **{f"arch-{n}v-t{t:.2f}": (lambda n=n, t=t: voussoir_arch(n, t)) for n, t in ((9, 0.15),
-                                                                                 (9, 0.20))},
+    **{f"column-{n}drums": partial(drum_column, n) for n in (3, 5, 10)},
+    **{f"parapet-offset{e:.2f}": partial(parapet, e) for e in (0.0, 0.25)},
+    **{f"wall-{c}x{b}": partial(running_bond_wall, c, b) for c, b in ((6, 3), (10, 3))},
+    **{f"arch-{n}v-t{t:.2f}": partial(voussoir_arch, n, t) for n, t in ((9, 0.15), (9, 0.20))},
 }
 #: Family prefixes of ASSEMBLY_CASES; each has the suite ``assembly-<family>``.
 ASSEMBLY_FAMILIES = ("column", "parapet", "wall", "arch")
@@ -245,11 +273,15 @@ def _assemblies() -> dict[str, Callable[[], Scenario]]:
     for name, build in ASSEMBLY_CASES.items():
         family, param = name.split("-", 1)
         text = _ASSEMBLY_TEXT[family].format(*_NUMBER.findall(param))
-        cat[name] = lambda name=name, build=build, text=text: Scenario(
-            name=name, geometry=build(), contact=Contact(friction=1.0), duration=2.0,
-            output_rate=RATE, description=f"{text}, at rest",
-        )
+        cat[name] = partial(_assembly_case, name, build, text)
     return cat
+
+
+def _assembly_case(name: str, build: Callable[[], Geometry], text: str) -> Scenario:
+    return Scenario(
+        name=name, geometry=build(), contact=Contact(friction=1.0), duration=2.0,
+        output_rate=RATE, description=f"{text}, at rest",
+    )
 
 
 _CATALOG.update(_assemblies())

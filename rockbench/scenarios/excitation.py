@@ -1,6 +1,12 @@
-"""Base excitations: horizontal ground motion along +x, starting from rest.
+"""Base excitations: a three-component base motion (x, y horizontal, z vertical), from rest.
 
-Every excitation returns acceleration, velocity and displacement that are exact
+An excitation gives its :class:`~rockbench.scenarios.motion.BaseMotion` (x, y, z) through
+:meth:`Excitation.base_motion`. The one-dimensional motions (pulses, sinusoids, records,
+the tilting table: :class:`AxialExcitation`) move the base along +x and keep it still
+along y and z; the ``components`` excitation (:class:`Components`) takes one such 1-D
+motion per axis, ``[excitation.x]``, ``[excitation.y]`` and ``[excitation.z]``.
+
+Every 1-D motion returns acceleration, velocity and displacement that are exact
 integrals of each other (closed forms for pulses and sinusoids, exact piecewise
 polynomial integration for records), so that an engine driven by displacement or
 velocity and an analytic model driven by acceleration see the same motion.
@@ -23,7 +29,7 @@ from bisect import bisect_right
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 
@@ -250,6 +256,9 @@ class Free(AxialExcitation):
         return {"type": self.kind}
 
 
+_PulseT = TypeVar("_PulseT", bound="_Pulse")
+
+
 @dataclass(frozen=True)
 class _Pulse(AxialExcitation):
     """Shared part of the one-sine and one-cosine acceleration pulses.
@@ -325,7 +334,8 @@ class _Pulse(AxialExcitation):
         return self.amplitude * self.omega**2
 
     @classmethod
-    def from_acceleration(cls, a_p: float, omega_p: float, cycles: int = 1) -> _Pulse:
+    def from_acceleration(cls: type[_PulseT], a_p: float, omega_p: float,
+                          cycles: int = 1) -> _PulseT:
         """The pulse given by its acceleration amplitude a_p and circular frequency ω_p.
 
         Parameters
@@ -883,7 +893,7 @@ def _short(line: str, limit: int = 60) -> str:
 
 
 def _parse_csv(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
-    rows = []
+    rows: list[list[float]] = []
     for ln, line in enumerate(text.splitlines(), 1):
         s = line.strip()
         if not s or s.startswith("#"):

@@ -246,8 +246,8 @@ def _geometry_tables(geo: Geometry) -> list[dict[str, Any]]:
             out.append(d)
         return out
     out = []
-    for b, (x, z, a) in zip(geo.bodies, geo.poses, strict=True):
-        d = b.to_dict()
+    for body, (x, z, a) in zip(geo.bodies, geo.poses, strict=True):
+        d = body.to_dict()
         d.update({"x": x, "z": z, "angle": a})
         out.append(d)
     return out

@@ -48,6 +48,7 @@ from enum import Enum
 from rockbench.errors import ScenarioError
 from rockbench.geometry import RockingProperties
 from rockbench.scenarios.excitation import CosinePulse, Excitation, Record, SinePulse
+from rockbench.scenarios.motion import Motion
 
 __all__ = ["IntensityMeasure", "PulseRatios", "peak_ground_acceleration",
            "peak_ground_velocity", "intensity", "scale_factor", "scale_record", "pulse_ratios"]
@@ -110,8 +111,13 @@ def peak_ground_acceleration(excitation: Excitation) -> float:
 
     Exact for records (the acceleration is linear between samples, so its peak
     is a sample) and for the analytic pulses.
+
+    Raises
+    ------
+    ScenarioError
+        For an excitation of several components.
     """
-    return float(excitation.peak_acceleration())
+    return float(_axial(excitation, "PGA").peak_acceleration())
 
 
 def peak_ground_velocity(excitation: Excitation) -> float:
@@ -124,9 +130,17 @@ def peak_ground_velocity(excitation: Excitation) -> float:
     Raises
     ------
     ScenarioError
-        For a motion that never ends.
+        For a motion that never ends, or one of several components.
     """
-    return float(excitation.peak_velocity())
+    return float(_axial(excitation, "PGV").peak_velocity())
+
+
+def _axial(excitation: Excitation, measure: str) -> Motion:
+    """The excitation as one motion along x; a multi-component one has no PGA or PGV here."""
+    if not isinstance(excitation, Motion):
+        raise ScenarioError(f"the {measure} is defined for a motion along x (a record or a "
+                            f"pulse), not for a {excitation.kind!r} excitation")
+    return excitation
 
 
 def _velocity_scale(rocking: RockingProperties, g: float) -> float:

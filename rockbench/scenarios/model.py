@@ -15,7 +15,7 @@ import numpy as np
 
 from rockbench import checks
 from rockbench.errors import ScenarioError
-from rockbench.geometry import Block, Body, Geometry, single
+from rockbench.geometry import Block, Body, Column, Geometry, single
 from rockbench.scenarios.excitation import Excitation, Free
 from rockbench.scenarios.motion import BaseMotion
 
@@ -174,7 +174,13 @@ class Scenario:
         """Initial rotation in rad (fraction × bottom block's λ); 0 when not tilted."""
         if self.initial_tilt == 0:
             return 0.0
-        return self.initial_tilt * self.geometry.column.blocks[0].rocking(self.g).lam  # type: ignore[union-attr]
+        return self.initial_tilt * self._tilted_column().blocks[0].rocking(self.g).lam
+
+    def _tilted_column(self) -> Column:
+        """The geometry as a column: a scenario with an initial tilt is one (__post_init__)."""
+        column = self.geometry.column
+        assert column is not None
+        return column
 
     def output_times(self) -> np.ndarray:
         """Sample times 0, 1/rate, … up to the duration."""
@@ -192,7 +198,7 @@ class Scenario:
         c = geo.centroids
         if th == 0.0:
             return np.column_stack([c, geo.angles])
-        px = math.copysign(geo.bodies[0].pivot_half_width, th) + geo.poses[0][0]  # type: ignore[union-attr]
+        px = math.copysign(self._tilted_column().blocks[0].pivot_half_width, th) + geo.poses[0][0]
         dx, dz = c[:, 0] - px, c[:, 1]
         # rotation about +y by θ maps (x, z) -> (x cos θ + z sin θ, −x sin θ + z cos θ)
         ct, st = math.cos(th), math.sin(th)

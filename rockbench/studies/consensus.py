@@ -26,6 +26,7 @@ import math
 import statistics
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 
 from rockbench.engines import engine_class
 from rockbench.evaluation import PEAK_FLOOR
@@ -84,6 +85,11 @@ def _family(c: Convergence) -> str:
     return engine_class(c.method.engine).contact_model or c.method.engine
 
 
+def _peak(i: int, c: Convergence) -> Estimate | None:
+    """The peak estimate of block ``i`` of a ladder."""
+    return c.peaks[i]
+
+
 def _agree(value: float, centre: float, unc: float, tol: float, floor: float) -> bool:
     return abs(value - centre) <= tol * max(abs(centre), floor) + unc
 
@@ -111,8 +117,9 @@ def consensus(ladders: Sequence[Convergence],
     fams: dict[str, list[Convergence]] = {}
     for c in best.values():
         fams.setdefault(_family(c), []).append(c)
-    # 1. the outcome most families agree on
-    outcomes = {f: statistics.mode(c.outcome for c in cs) for f, cs in fams.items()}
+    # 1. the outcome most families agree on (a converged ladder has one)
+    outcomes = {f: statistics.mode(c.outcome for c in cs if c.outcome is not None)
+                for f, cs in fams.items()}
     if not outcomes:
         return Consensus(name, False, None, (), None, (), (), "no engine converged")
     count = {o: sum(v is o for v in outcomes.values()) for o in set(outcomes.values())}
@@ -127,14 +134,14 @@ def consensus(ladders: Sequence[Convergence],
     n_blocks = len(next(iter(keep.values()))[0].peaks) if keep else 0
 
     def family_value(cs: list[Convergence], get: Getter) -> tuple[float, float] | None:
-        vals = [get(c) for c in cs]
-        vals = [v for v in vals if v is not None]
+        vals = [v for v in (get(c) for c in cs) if v is not None]
         if not vals:
             return None
         return (statistics.median(v.value for v in vals), max(v.uncertainty for v in vals))
 
-    quantities = [(f"peak {i + 1}", (lambda c, i=i: c.peaks[i]), tolerances.peak, PEAK_FLOOR)
-                  for i in range(n_blocks)]
+    quantities: list[tuple[str, Getter, float, float]] = [
+        (f"peak {i + 1}", partial(_peak, i), tolerances.peak, PEAK_FLOOR)
+        for i in range(n_blocks)]
     if outcome is Status.OVERTURNED:
         quantities.append(("overturning time", lambda c: c.overturn_time,
                            tolerances.overturn_time, 0.0))
@@ -143,8 +150,8 @@ def consensus(ladders: Sequence[Convergence],
     while changed and len(keep) >= MIN_FAMILIES:
         changed = False
         for what, get, tol, floor in quantities:
-            values = {f: family_value(cs, get) for f, cs in keep.items()}
-            values = {f: v for f, v in values.items() if v is not None}
+            found = {f: family_value(cs, get) for f, cs in keep.items()}
+            values = {f: v for f, v in found.items() if v is not None}
             if len(values) < MIN_FAMILIES:
                 continue
             centre = statistics.median(v for v, _ in values.values())
@@ -171,7 +178,7 @@ def consensus(ladders: Sequence[Convergence],
         spread = max(abs(v - centre) for v, _ in values)
         return Estimate(centre, spread + max(u for _, u in values))
 
-    peaks = tuple(agreed(lambda c, i=i: c.peaks[i]) for i in range(n_blocks))
+    peaks = tuple(agreed(partial(_peak, i)) for i in range(n_blocks))
     over = agreed(lambda c: c.overturn_time) if outcome is Status.OVERTURNED else None
     return Consensus(name, True, outcome, tuple(p for p in peaks if p is not None), over,
                      members, tuple(outliers))

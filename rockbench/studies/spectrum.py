@@ -102,7 +102,8 @@ def parse_block(spec: str) -> BlockSpec:
     Raises
     ------
     ScenarioError, UnknownScenario
-        Neither a valid size nor a known scenario.
+        Neither a valid size nor a known scenario, or a scenario whose first body
+        is not a rectangular block.
     """
     m = _SIZE.match(spec)
     if m:
@@ -113,7 +114,11 @@ def parse_block(spec: str) -> BlockSpec:
         block = Block(width=w, depth=w, height=h, density=DEFAULT_DENSITY)
         return BlockSpec(f"{w:g}x{h:g}", block, Contact(friction=1.0), 9.81)
     sc = get_scenario(spec)
-    return BlockSpec(sc.name, sc.blocks[0], sc.contact, sc.g)
+    first = sc.blocks[0]
+    if not isinstance(first, Block):
+        raise ScenarioError(f"--block {spec!r}: the scenario's first body is a "
+                            f"{type(first).__name__}, not a rectangular block")
+    return BlockSpec(sc.name, first, sc.contact, sc.g)
 
 
 def parse_grid(spec: str) -> tuple[int, int]:

@@ -167,7 +167,7 @@ class SweepResult:
     """Points of a sweep on one scenario."""
 
     scenario: Scenario
-    grid: dict[str, dict[str, list[Any]]]
+    grid: dict[str, dict[str, Sequence[Any]]]
     points: list[SweepPoint] = field(default_factory=list)
     metric: str = "max_error"
     reference_note: str = ""

@@ -28,6 +28,7 @@ least CPU time over the scenarios.
 from __future__ import annotations
 
 import enum
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -128,14 +129,15 @@ def judge_closed_form(result: RunResult, reference: Trajectory,
 
     if not m.status.completed:
         return judged(Trust.NOT_TRUSTED, f"{m.status.value}: {m.message}")
-    chaotic = m.horizon is not None and m.horizon < m.duration
+    horizon = math.inf if m.horizon is None else m.horizon  # t* (none known: no limit)
+    chaotic = horizon < m.duration
     t_ref = float(reference.t[-1]) if reference.t.size else 0.0
     # beyond t* the reference is not predictable: how the run ends there is not judged
-    predictable_end = not chaotic or (ref is Status.OVERTURNED and t_ref <= m.horizon)
+    predictable_end = not chaotic or (ref is Status.OVERTURNED and t_ref <= horizon)
     if m.status is not ref and predictable_end:
         return judged(Trust.NOT_TRUSTED, f"ends {_ends(m.status)}, the closed form "
                                          f"{_ends(ref)}")
-    upto = f" up to t* = {m.horizon:.2f} s" if chaotic else ""
+    upto = f" up to t* = {horizon:.2f} s" if chaotic else ""
     parts, bad = [], []
     if m.status is Status.OVERTURNED and ref is Status.OVERTURNED and predictable_end:
         t_run = m.simulated_time

@@ -222,11 +222,11 @@ def verdict_of(results: Sequence[RunResult], references: dict[str, Trajectory | 
             continue
         ref = references.get(name)
         c = cons.get(name)
-        lad = ladder_of.get((name, res.method))
+        ladder = ladder_of.get((name, res.method))
         if ref is not None and ref.status.completed:
             judgements.append(judge_closed_form(res, ref, tolerances))
-        elif c is not None and c.formed and lad is not None:
-            judgements.append(judge_consensus(lad, c, tolerances))
+        elif c is not None and c.formed and ladder is not None:
+            judgements.append(judge_consensus(ladder, c, tolerances))
         elif c is not None and c.formed:
             judgements.append(Judgement(name, res.method, Trust.NOT_CONVERGED, "consensus",
                                         "no convergence ladder: the engine declares no "
@@ -277,7 +277,7 @@ def run_verification(opts: VerifyOptions,
         horizon_members=opts.horizon_members), progress=progress)
     refs = campaign.references
     closed = {sc.name for sc in opts.scenarios
-              if refs.get(sc.name) is not None and refs[sc.name].status.completed}  # type: ignore[union-attr]
+              if (ref := refs.get(sc.name)) is not None and ref.status.completed}
     climb = [sc for sc in opts.scenarios
              if opts.converge == "all" or (opts.converge == "auto" and sc.name not in closed)]
     horizons = {n: p.t_star for n, p in campaign.horizons.items()}
