@@ -92,6 +92,7 @@ def test_run_engine_against_reference_npz(tmp_path, capsys):
     assert np.max(np.abs(mj.theta - ref.theta)) / 0.4636 < 0.02
 
 
+@pytest.mark.slow
 def test_a_closed_pipe_ends_the_output_quietly():
     """``rockbench records --json | head -1``: the reader goes away, no traceback."""
     cmd = f"{shlex.quote(sys.executable)} -m rockbench.cli records --json | head -1"

@@ -114,6 +114,7 @@ def block_study():
                              settings={"pymunk": PYMUNK}, rtol=0.02, execution=HERE)
 
 
+@pytest.mark.slow
 def test_collapse_amplitude_tends_to_the_static_factor_at_low_frequency(block_study):
     for e in ("analytic", "pymunk"):
         slow, fast = block_study.curve("slender", e)
@@ -169,6 +170,7 @@ def _png_size(path) -> tuple[int, int]:
     return struct.unpack(">II", data[16:24])
 
 
+@pytest.mark.slow
 def test_report_files_exist_and_figures_are_real_pngs(tmp_path, block_study):
     cmps = tilting_table([PARAPET], "pymunk", settings=PYMUNK, execution=HERE)
     study = pulse_to_collapse([PARAPET], ["pymunk"], [0.5], settings={"pymunk": PYMUNK},

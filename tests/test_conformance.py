@@ -18,6 +18,9 @@ from rockbench.engines.testing import CHECKS, conformance_checks, parametrize_wi
 from rockbench.errors import UnknownEngine
 from rockbench.trajectory import Trajectory
 
+# every test here runs engines for seconds (measured with --durations): the slow tier
+pytestmark = pytest.mark.slow
+
 
 @parametrize_with_checks([info.name for info in list_engines()])
 def test_conformance(engine, check):

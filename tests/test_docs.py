@@ -52,3 +52,74 @@ def test_readme_commands_parse():
     for argv in commands:
         argv = [a for a in argv if a != "&&"]
         parser.parse_args(argv)  # SystemExit (status 2) on an unknown option
+
+
+def _architecture_layers() -> list[list[str]]:
+    """The layers the README's Architecture block names, bottom first: the names at the
+    head of each unindented line (``runner | store | presets``, ``geometry/``...)."""
+    text = (ROOT / "README.md").read_text()
+    block = text.split("## Architecture", 1)[1].split("```", 2)[1]
+    head = re.compile(r"^([a-z_]+/?(?:(?:, | \| )[a-z_]+/?)*)(?=\s|$)")
+    layers = []
+    for line in block.splitlines():
+        if not line.strip() or line[0].isspace():
+            continue  # a description carried over from the line above
+        m = head.match(line)
+        assert m, f"an Architecture line without a layer: {line!r}"
+        layers.append(re.split(r", | \| ", m.group(1)))
+    return layers
+
+
+def test_readme_architecture_is_the_import_contract():
+    # the README's Architecture block names the layers of the import-linter contract in
+    # pyproject.toml, bottom up, and each name is the package (name/) or module it says
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10
+        import tomli as tomllib
+
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    contract = config["tool"]["importlinter"]["contracts"][0]
+    assert contract["type"] == "layers"
+    expected = [sorted(n.strip() for n in layer.split("|")) for layer in contract["layers"]]
+    readme = _architecture_layers()
+    assert [sorted(n.rstrip("/") for n in layer) for layer in readme] == expected[::-1]
+    package = ROOT / "rockbench"
+    for name in (n for layer in readme for n in layer):
+        if name.endswith("/"):
+            assert (package / name / "__init__.py").is_file(), f"{name} is not a package"
+        else:
+            assert (package / f"{name}.py").is_file(), f"{name} is not a module"
+    # the prose above the block says where the contract lives and what checks it
+    intro = (ROOT / "README.md").read_text().split("## Architecture", 1)[1].split("```", 1)[0]
+    assert "pyproject.toml" in intro and "lint-imports" in intro
+    named = re.findall(r"tests/\w+\.py", intro)
+    assert named and all((ROOT / path).is_file() for path in named), named
+
+
+def test_readme_is_an_entry_point():
+    # a newcomer reads it in five minutes: the details live in docs/
+    assert len((ROOT / "README.md").read_bytes()) <= 10_000
+
+
+def _relative_links(path: Path) -> list[str]:
+    text = path.read_text()
+    links = re.findall(r"\]\(([^)\s]+)\)", text)
+    return [ln.split("#", 1)[0] for ln in links
+            if not re.match(r"[a-z]+:", ln) and not ln.startswith("#")]
+
+
+def test_readme_and_contributing_links_resolve():
+    for name in ("README.md", "CONTRIBUTING.md"):
+        for link in _relative_links(ROOT / name):
+            assert (ROOT / link).exists(), f"{name} links to {link}, which does not exist"
+
+
+def test_every_engine_has_a_docs_page():
+    from importlib.metadata import entry_points
+
+    pages = ROOT / "docs" / "engines"
+    index = (pages / "index.md").read_text()
+    for ep in entry_points(group="rockbench.engines"):
+        assert (pages / f"{ep.name}.md").is_file(), f"no docs/engines/{ep.name}.md"
+        assert f"\n{ep.name}\n" in index, f"docs/engines/index.md does not list {ep.name}"

@@ -169,7 +169,7 @@ def test_free_rocking_b0_accurate(engine: BlenderEngine) -> None:
     ref = single_block_reference(sc)
     tr = engine.simulate(sc, "accurate")
     assert tr.status is Status.OK
-    # measured with benchmarks/calibrate_blender.py: held in the plane, the first three
+    # measured by the former Blender calibration script: held in the plane, the first three
     # impacts within 0.01 %, max |θ − θ_ref| 0.0004 λ over 3.6 s (free in 3D: 0.26 % and
     # 0.011 λ, the pivot creep; see the module docstring)
     np.testing.assert_allclose(impact_times(tr)[:3], impact_times(ref)[:3], rtol=5e-4)
@@ -452,7 +452,8 @@ def test_slides_like_the_exact_coulomb_solution(engine: BlenderEngine, case: str
     check_slides_like_coulomb(sc, engine.simulate(sc), reference(sc))
 
 
-# benchmarks/stack_convergence.py (accurate, Δt 0.1 ms): the 5 Hz / 4 mm pulse's peaks
+# The stack-convergence measurements (docs/engines/stack-convergence.md; accurate,
+# Δt 0.1 ms): the 5 Hz / 4 mm pulse's peaks
 # +0.3 / −0.9 %, interface slip up to 2.2e-4 m over the ten stack cases; the sinusoid
 # erratic in the step (−33 / −0.8 / −35 % at 0.1 / 0.05 / 0.025 ms) and in every knob bpy
 # exposes
@@ -461,7 +462,7 @@ def test_slides_like_the_exact_coulomb_solution(engine: BlenderEngine, case: str
     ("stack-pulse-5.0hz-4mm", 0.02),
     pytest.param("stack-sine-5.0hz-4mm", 0.05, marks=pytest.mark.xfail(
         strict=True, reason="peaks −33 / −21 % of the two-block solution at 0.1 ms, erratic "
-                            "in the step and knobs (benchmarks/stack_convergence.py)")),
+                            "in the step and knobs (docs/engines/stack-convergence.md)")),
 ])
 def test_stack_follows_the_two_block_solution(engine: BlenderEngine, case: str,
                                               tol: float) -> None:

@@ -182,6 +182,7 @@ def test_settings_dataclass_is_frozen() -> None:
 
 
 # ---------------------------------------------------------------- assemblies
+@pytest.mark.slow
 def test_assemblies_of_boxes_stay_at_rest(engine: BulletEngine) -> None:
     # box-box contacts (four corner points per face from the first step): a column, a
     # parapet on its wall and a running-bond wall keep their poses to 1e-5 λ and 20 µm
@@ -219,6 +220,7 @@ def test_prism_in_its_principal_frame_reads_back_its_own_pose(engine: BulletEngi
     assert peak_b > 0.05 and peak_p == pytest.approx(peak_b, rel=0.1)
 
 
+@pytest.mark.slow
 def test_supports_move_with_the_base(engine: BulletEngine) -> None:
     # (to 0.5 %: the voussoirs lag the base by a few 0.1 mm, Bullet's contacts creep)
     check_arch_rides_its_supports(engine, rtol=0.01, turn=0.01)
@@ -243,5 +245,6 @@ def test_interface_friction_zero_in_an_assembly_is_unsupported(engine: BulletEng
 # Tilting table at 0.05 /s and 0.025 /s (accurate preset), measured: parapet onsets
 # 0.1302 / 0.1275 against the LP's 0.125 (+2.0 %), 5-drum column 0.2484 / 0.2450
 # against 0.24 (+2.1 %), the LP mechanism (the parapet alone; the column as one body).
+@pytest.mark.slow
 def test_tilting_table_onset_matches_the_collapse_factor() -> None:
     check_tilting_table("bullet")

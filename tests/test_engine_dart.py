@@ -41,6 +41,7 @@ def crossings(t: np.ndarray, th: np.ndarray, n: int = 3) -> np.ndarray:
     return zero_crossings(t, th)[:n]
 
 
+@pytest.mark.slow
 def test_free_rocking_b2_accurate_matches_housner() -> None:
     sc = Scenario("free-b2-0.5", B2, initial_tilt=0.5, duration=2.5)
     traj = DartEngine().simulate(sc, "accurate")
@@ -237,5 +238,6 @@ def test_interface_friction_below_the_base_friction_off_a_column_is_unsupported(
 # Tilting table at 0.05 /s and 0.025 /s (fast preset; the single preset's onsets are
 # the same), measured: parapet 0.1311 / 0.1289 against the LP's 0.125 (+3.2 %), 5-drum
 # column 0.2487 / 0.2456 against 0.24 (+2.3 %), both extrapolated to rate 0 within 0.3 %.
+@pytest.mark.slow
 def test_tilting_table_onset_matches_the_collapse_factor() -> None:
     check_tilting_table("dart", {"preset": "fast"}, slower_first=False, extrapolated=0.01)

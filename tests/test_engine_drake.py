@@ -38,7 +38,8 @@ from rockbench.engines.drake_engine import (  # noqa: E402
 from rockbench.scenarios import Contact, Scenario, SinePulse, get_scenario  # noqa: E402
 from rockbench.trajectory import Status  # noqa: E402
 
-pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
+# every test here runs Drake for seconds (measured with --durations): the slow tier
+pytestmark = [pytest.mark.filterwarnings("ignore::DeprecationWarning"), pytest.mark.slow]
 
 
 @pytest.fixture(scope="module", autouse=True)

@@ -263,7 +263,8 @@ def test_tilting_table_onset_matches_the_collapse_factor() -> None:
     check_tilting_table("lmgc90", overshoot=0.045)
 
 
-# benchmarks/stack_convergence.py (accurate, Δt 0.1 ms): the 5 Hz / 4 mm pulse's peaks
+# The stack-convergence measurements (docs/engines/stack-convergence.md; accurate,
+# Δt 0.1 ms): the 5 Hz / 4 mm pulse's peaks
 # −0.5 / −0.4 %, interface slip < 1e-6 m (non-smooth contact); the sinusoid moves away as
 # the step shrinks (−2 / −21 / −31 % at 0.2 / 0.1 / 0.05 ms): LMGC90's impacts keep more
 # energy than Housner's η
@@ -273,7 +274,7 @@ def test_tilting_table_onset_matches_the_collapse_factor() -> None:
     pytest.param("stack-sine-5.0hz-4mm", 0.05, marks=pytest.mark.xfail(
         strict=True, reason="bottom block's peak −21 % of the two-block solution at 0.1 ms, "
                             "−31 % at 0.05 ms: its impacts keep more energy than Housner's "
-                            "eta (benchmarks/stack_convergence.py)")),
+                            "eta (docs/engines/stack-convergence.md)")),
 ])
 def test_stack_follows_the_two_block_solution(engine: Lmgc90Engine, case: str,
                                               tol: float) -> None:

@@ -36,6 +36,9 @@ from rockbench.engines import (
 from rockbench.engines.analytic_engine import AnalyticEngine
 from rockbench.errors import EngineUnavailable
 
+# a child process per engine library, seconds each (measured with --durations): slow tier
+pytestmark = pytest.mark.slow
+
 #: blocked import name -> (engine that needs it, rockbench extra that installs it)
 LIBRARIES = {
     "mujoco": ("mujoco", "mujoco"),
@@ -94,6 +97,7 @@ tilt = 0.5
 DRIVER = '''\
 import contextlib, io, json, sys, traceback
 from rockbench.cli import main
+
 results = []
 for argv in json.loads(sys.argv[1]):
     out, err = io.StringIO(), io.StringIO()

@@ -89,6 +89,7 @@ def study(scenario: Scenario, records, levels, **kw) -> object:
     return run_fragility(FragilityOptions(scenario, records, levels=levels, **kw))
 
 
+@pytest.mark.slow
 def test_size_effect_larger_block_of_same_slenderness_is_less_fragile():
     # Housner (1963): of two blocks of one slenderness the larger (smaller p) survives more
     levels = tuple(np.geomspace(1.5, 30.0, 10))

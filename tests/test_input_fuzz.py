@@ -113,6 +113,7 @@ flag_values = st.one_of(st.sampled_from(["inf", "nan", "-1", "0", "1e309", "x", 
 @settings(max_examples=60, deadline=None)
 @given(knob=knob_names, value=flag_values,
        flag=st.sampled_from(["--set", "--timeout", "--jobs", "--max-memory"]))
+@pytest.mark.slow
 def test_flags(knob: str, value: str, flag: str) -> None:
     argv = ["run", "free-b2-0.5", "--engine", "pymunk", "--no-isolate"]
     argv += [flag, f"pymunk.{knob}={value}" if flag == "--set" else value]

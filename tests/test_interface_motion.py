@@ -222,6 +222,7 @@ IF_KNOWN = {
     pytest.param(e, marks=(pytest.mark.xfail(strict=True, reason=IF_KNOWN[e]),)
                  if e in IF_KNOWN else ())
     for e in ("bullet", "dart", "dem2d", "drake", "mujoco", "pymunk")])
+@pytest.mark.slow
 def test_engines_apply_the_interface_friction(engine):
     from rockbench.analytic import slip_of
     from rockbench.engines import engine_class

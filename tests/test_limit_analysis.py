@@ -312,6 +312,7 @@ def test_arch_minimum_thickness_equals_the_hinge_enumeration(n):
     assert _arch_minimum_thickness(n) == pytest.approx(_enumerated_minimum_thickness(n), abs=2e-9)
 
 
+@pytest.mark.slow
 def test_arch_minimum_thickness_approaches_milankovitch():
     t_c, beta = _continuous_minimum_thickness()
     # the reference itself: Milankovitch's t/R = 0.1075, intrados hinge 54.5° from the crown

@@ -365,6 +365,7 @@ def test_matrix_unknown_suite_exits_2(capsys: pytest.CaptureFixture[str]) -> Non
     assert "did you mean 'smoke'" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_matrix_on_a_dask_local_cluster(tmp_path: Path, tiny_suite: str,
                                         capsys: pytest.CaptureFixture[str]) -> None:
     distributed = pytest.importorskip("distributed")

@@ -74,6 +74,7 @@ def test_well_posed_single_block_pulse_horizon_is_the_duration():
     assert p.spread < 1e-3  # perturbations of 1e-6 stay of that order
 
 
+@pytest.mark.slow
 def test_chaotic_stack_sine_has_a_horizon_stable_to_the_seed():
     sc = _short(CHAOTIC, 3.0)
     stars = [predictability([sc], members=4, perturbation=Perturbation(seed=s),
@@ -165,6 +166,7 @@ def test_identical_method_ensembles_are_at_distance_zero():
     assert all(d is not None and d.value == 0.0 for d in comp.distances)
 
 
+@pytest.mark.slow
 def test_compare_measures_errors_up_to_t_star_and_reports_distributions(tmp_path):
     sc = _short(CHAOTIC, 3.0)
     register("fault", fault_engine.FaultEngine)  # follows the reference closely
@@ -191,6 +193,7 @@ def test_compare_measures_errors_up_to_t_star_and_reports_distributions(tmp_path
     assert (tmp_path / "figures" / f"ensemble-{sc.name}.png").stat().st_size > 0
 
 
+@pytest.mark.slow
 def test_matrix_cells_are_measured_up_to_t_star():
     sc = _short(CHAOTIC, 3.0)
     register("fault", fault_engine.FaultEngine)

@@ -98,6 +98,7 @@ def _compare_rows(src: Path, out: Path, db: Path) -> dict[str, dict[str, str]]:
         return {row["method"]: row for row in csv.DictReader(f)}
 
 
+@pytest.mark.slow
 def test_a_change_to_the_analytic_code_recomputes_the_cached_reference(tmp_path: Path) -> None:
     """The issue's case: η halved in the analytic code, compare rerun in the same folder."""
     src = _copy_package(tmp_path)

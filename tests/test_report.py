@@ -144,6 +144,7 @@ def _table_lines(md: str, scenario: str) -> list[str]:
     return [ln for ln in md.splitlines() if ln.startswith(f"| **{scenario}**")]
 
 
+@pytest.mark.slow
 def test_files_exist(report: dict) -> None:
     out = report["out"]
     for name in ("index.html", "report.md", "results.csv"):
@@ -265,6 +266,7 @@ def test_figures_are_pngs(report: dict) -> None:
         assert len(data) > 10_000 and w > 300 and h > 200, f.name
 
 
+@pytest.mark.slow
 def test_resume_skips_finished_runs(report: dict, capsys: pytest.CaptureFixture) -> None:
     out, eng = report["out"], report["engine"]
     # the campaign archives every run's trajectory beside the store; the report copies them
@@ -314,6 +316,7 @@ def test_history_lists_compare_runs(report: dict, capsys: pytest.CaptureFixture)
     assert report["engine"] in out and "compare" in out
 
 
+@pytest.mark.slow
 def test_resume_reruns_a_torn_trajectory(report: dict, capsys: pytest.CaptureFixture) -> None:
     out, eng = report["out"], report["engine"]
     # other tests rewrite the files with other knobs: start from the fixture's settings

@@ -27,6 +27,9 @@ from rockbench.runner import (
 from rockbench.scenarios import Block, Free, Scenario, SinePulse
 from rockbench.trajectory import Status, Trajectory
 
+# every test here runs engines for seconds (measured with --durations): the slow tier
+pytestmark = pytest.mark.slow
+
 sys.path.insert(0, str(Path(__file__).parent))
 fault_engine = importlib.import_module("fault_engine")
 
@@ -246,6 +249,7 @@ import fault_engine
 from rockbench.engines import register
 from rockbench.runner import ExecutionOptions, Job, run_job_subprocess, run_jobs
 from rockbench.scenarios import Block, Scenario
+
 register("fault", fault_engine.FaultEngine)
 sc = Scenario("hang", Block(0.2, 0.2, 0.8, mass=1.0), duration=5.0, output_rate=200.0)
 job = Job(sc, "fault", {{"fault": "hang", "at": 0.0}})

@@ -215,6 +215,7 @@ def _record_text(draw: st.DrawFn, text: str) -> bytes:
 
 @FUZZ
 @given(kind=st.sampled_from(["csv", "AT2"]), data=st.data())
+@pytest.mark.slow
 def test_mutated_record_files(fuzz_dir, kind, data):
     raw = data.draw(_record_text(CSV_TEXT if kind == "csv" else AT2_TEXT), label="record")
     rec = fuzz_dir / f"fuzzed.{kind}"
@@ -273,6 +274,7 @@ def test_run_exits_2_with_one_line(tmp_path, capsys, name):
 
 
 @pytest.mark.parametrize("name", ["binary", "overflowing-record"])
+@pytest.mark.slow
 def test_run_in_a_process_prints_no_traceback(tmp_path, name):
     path = _write_cli_case(tmp_path, name)
     proc = subprocess.run(

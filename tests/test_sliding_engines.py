@@ -94,6 +94,7 @@ def test_the_known_failures_name_real_cases():
 
 
 @pytest.mark.parametrize("engine, case", _params())
+@pytest.mark.slow
 def test_engine_slides_like_the_exact_solution(engine, case):
     sc = get_scenario(case)
     ref = exact(case)

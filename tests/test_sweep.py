@@ -173,6 +173,7 @@ def test_settings_files(tmp_path: Path) -> None:
         layered_settings(["fault"], settings_file=bad)
 
 
+@pytest.mark.slow
 def test_tune_finds_the_cheapest_settings_and_writes_a_preset(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert tunable_knobs("fault") == {"timestep": "smaller", "iterations": "larger"}

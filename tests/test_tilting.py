@@ -94,6 +94,7 @@ def test_limit_analysis_reference_of_the_cases():
     assert alphas == pytest.approx([0.5, 0.125, 0.6 / 2.5], rel=1e-7)
 
 
+@pytest.mark.slow
 def test_tilting_table_onset_matches_the_collapse_factor(comparisons):
     engine, cmps = comparisons
     for name, c in zip(CASES, cmps, strict=True):
@@ -126,6 +127,7 @@ def test_parapet_tilted_the_other_way_holds_to_its_longer_lever():
     assert math.isfinite(c.half.cpu_time) and c.half.cpu_time > 0
 
 
+@pytest.mark.slow
 def test_thin_arch_opens_its_four_hinge_mechanism_at_the_lp_factor():
     # t/R = 0.15, not far above the minimum 0.1075: the contacts settle first (SETTLE)
     sc = get_scenario("arch-9v-t0.15")
@@ -139,6 +141,7 @@ def test_thin_arch_opens_its_four_hinge_mechanism_at_the_lp_factor():
 
 
 @pytest.mark.parametrize("engine", list(SETTINGS))
+@pytest.mark.slow
 def test_running_bond_wall_turns_its_stepped_wedge_out_at_the_coulomb_lp_factor(engine):
     # Coulomb joints: the nine-brick wedge above the first course turns about that
     # course's leeward corner at 11/19 (its head joints open); the associative LP's 0.992

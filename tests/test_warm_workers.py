@@ -113,6 +113,7 @@ def test_a_warm_worker_killed_mid_run_costs_only_that_run() -> None:
     assert len(after) == 1 and before not in after  # a fresh worker, warm again
 
 
+@pytest.mark.slow
 def test_timeouts_and_crashes_in_a_warm_worker_spare_the_next_runs() -> None:
     faults = ["none", "segfault", "none", "hang", "none", "exit", "none"]
     jobs = [Job(SCENARIO, "pid", {"fault": f, "at": 0.0}) for f in faults]
