@@ -17,6 +17,7 @@ __all__ = [
     "UnknownScenario",
     "UnsupportedScenario",
     "EngineUnavailable",
+    "PlausibilityWarning",
 ]
 
 
@@ -59,3 +60,7 @@ class UnsupportedScenario(RockbenchError):
 
 class EngineUnavailable(RockbenchError, ImportError):
     """The engine's library is not installed or failed to import."""
+
+
+class PlausibilityWarning(UserWarning):
+    """A value physics can use but that is probably a slip (of units, most often)."""

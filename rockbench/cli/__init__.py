@@ -14,9 +14,10 @@ import importlib
 import os
 import pkgutil
 import sys
+import warnings
 from collections.abc import Callable, Sequence
 from types import ModuleType
-from typing import NoReturn
+from typing import NoReturn, TextIO
 
 from rockbench import provenance
 from rockbench.cli.common import memory_budget
@@ -82,6 +83,12 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
+                      lineno: int, file: TextIO | None = None, line: str | None = None) -> None:
+    """Print a warning as one line on stderr: a user's slip is news, a source line is not."""
+    print(f"rockbench: warning: {message}", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rockbench`` console script; returns the exit status."""
     parser = build_parser()
@@ -92,7 +99,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
-        with memory_budget(args):
+        with memory_budget(args), warnings.catch_warnings():
+            warnings.showwarning = _one_line_warning
             return int(args._execute(args))
     except RockbenchError as exc:
         print(f"rockbench: error: {exc}", file=sys.stderr)

@@ -123,6 +123,9 @@ def _coerce(value: Any, kind: Any, name: str) -> Any:
         if kind is int:
             if value != int(value):
                 raise bad
+            if abs(value) > _MAX_INT:  # engines hand integer knobs to C as an int
+                raise SettingsError(f"{name} must be an integer of at most {_MAX_INT} in size "
+                                    f"(the engines pass it to C as an int), got {value!r}")
             return int(value)
         return float(value)
     if kind is str:
@@ -134,6 +137,8 @@ def _coerce(value: Any, kind: Any, name: str) -> Any:
 
 _KIND_NAMES = {bool: "a boolean (true/false)", int: "an integer", float: "a number",
                str: "a string"}
+#: Largest integer knob accepted: a C int, as the engines' libraries take them.
+_MAX_INT = 2**31 - 1
 
 
 _SettingsT = TypeVar("_SettingsT", bound="EngineSettings")

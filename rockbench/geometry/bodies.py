@@ -69,12 +69,11 @@ class Block:
 
     def __post_init__(self) -> None:
         for name in ("width", "depth", "height"):
-            object.__setattr__(self, name, checks.number(getattr(self, name), f"block {name}",
-                                                         low=0.0, unit="m"))
+            object.__setattr__(self, name, checks.length(getattr(self, name), f"block {name}"))
         density, mass = _mass_or_density(self.density, self.mass)
         object.__setattr__(self, "density", density)
         object.__setattr__(self, "mass", mass)
-        c = checks.number(self.chamfer, "block chamfer", low=0.0, strict=False, unit="m")
+        c = checks.length(self.chamfer, "block chamfer", strict=False)
         if c >= 0.5 * min(self.width, self.height):
             raise ScenarioError(
                 f"block chamfer {c} must be smaller than half the width and half the height"
@@ -154,8 +153,19 @@ class Block:
         return d
 
 
-def vertex_list(raw: Any, what: str) -> tuple[tuple[float, float], ...]:
-    """Validate a list of [x, z] pairs of finite numbers (convexity is checked separately)."""
+def _unbounded(value: Any, what: str) -> float:
+    """A finite coordinate in metres, of any size."""
+    return checks.number(value, what, unit="m")
+
+
+def vertex_list(raw: Any, what: str, *, bounded: bool = True
+                ) -> tuple[tuple[float, float], ...]:
+    """Validate a list of [x, z] pairs of finite numbers (convexity is checked separately).
+
+    ``bounded``: each coordinate within :data:`rockbench.checks.MAX_LENGTH` of the
+    origin (a body's; the ground slab, sized from the scene, is not bounded).
+    """
+    point = checks.coordinate if bounded else _unbounded
     if not isinstance(raw, (list, tuple, np.ndarray)) or len(raw) < 3:
         raise ScenarioError(f"{what} must be a list of at least 3 [x, z] pairs, got "
                             f"{checks.describe(raw)}")
@@ -164,8 +174,8 @@ def vertex_list(raw: Any, what: str) -> tuple[tuple[float, float], ...]:
         if not isinstance(p, (list, tuple, np.ndarray)) or len(p) != 2:
             raise ScenarioError(f"{what}: vertex {i} must be an [x, z] pair, got "
                                 f"{checks.describe(p)}")
-        out.append((checks.number(p[0], f"{what}: vertex {i} x", unit="m"),
-                    checks.number(p[1], f"{what}: vertex {i} z", unit="m")))
+        out.append((point(p[0], f"{what}: vertex {i} x"),
+                    point(p[1], f"{what}: vertex {i} z")))
     return tuple(out)
 
 
@@ -203,8 +213,7 @@ class Prism:
     def __post_init__(self) -> None:
         v = vertex_list(self.vertices, "block vertices")
         object.__setattr__(self, "vertices", v)
-        object.__setattr__(self, "depth", checks.number(self.depth, "block depth", low=0.0,
-                                                        unit="m"))
+        object.__setattr__(self, "depth", checks.length(self.depth, "block depth"))
         density, mass = _mass_or_density(self.density, self.mass)
         object.__setattr__(self, "density", density)
         object.__setattr__(self, "mass", mass)
@@ -320,7 +329,7 @@ class Support:
     vertices: tuple[tuple[float, float], ...]
 
     def __post_init__(self) -> None:
-        v = vertex_list(self.vertices, "support vertices")
+        v = vertex_list(self.vertices, "support vertices", bounded=False)
         convex_polygon(np.array(v), "support")
         object.__setattr__(self, "vertices", v)
 

@@ -58,7 +58,7 @@ def stack(blocks: Sequence[Block], offsets: Sequence[float] = ()) -> Geometry:
         raise ScenarioError("a stack needs at least one block")
     if not all(isinstance(b, Block) for b in blocks):
         raise ScenarioError("stack blocks must be Block instances")
-    offs = tuple(checks.number(o, "stack offset", unit="m") for o in offsets) \
+    offs = tuple(checks.coordinate(o, "stack offset") for o in offsets) \
         or (0.0,) * len(blocks)
     if len(offs) != len(blocks):
         raise ScenarioError(f"stack offsets must be one per block: {len(offs)} offsets "
@@ -76,6 +76,13 @@ def _check_stands(blocks: Sequence[Block], offsets: Sequence[float]) -> None:
         right = min(offsets[i - 1] + lo.pivot_half_width, offsets[i] + up.pivot_half_width)
         m_above = sum(ms[i:])
         x_above = sum(m * x for m, x in zip(ms[i:], offsets[i:], strict=True)) / m_above
+        if not left < right:
+            raise ScenarioError(
+                f"block #{i + 1} does not touch block #{i}: their faces span x from "
+                f"{offsets[i] - up.pivot_half_width:g} to {offsets[i] + up.pivot_half_width:g} m "
+                f"and from {offsets[i - 1] - lo.pivot_half_width:g} to "
+                f"{offsets[i - 1] + lo.pivot_half_width:g} m (offsets are from the bottom "
+                f"block's centre)")
         if not left < x_above < right:
             raise ScenarioError(
                 f"block #{i + 1} is off its support: the centre of mass of the blocks from "
@@ -141,8 +148,8 @@ def _voussoirs(n: int, thickness: float, radius: float, arc_points: int
     ``n`` voussoirs, each sector's centre of gravity, and the sector's area."""
     if int(n) != n or n < 1:
         raise ScenarioError(f"an arch needs n >= 1 voussoirs, got {n!r}")
-    r = checks.number(radius, "arch radius", low=0.0, unit="m")
-    t = checks.number(thickness, "arch thickness", low=0.0, unit="m")
+    r = checks.length(radius, "arch radius")
+    t = checks.length(thickness, "arch thickness")
     if t >= 2 * r:
         raise ScenarioError(f"arch thickness {t} must be smaller than twice the radius {r}")
     ri, re = r - 0.5 * t, r + 0.5 * t

@@ -89,8 +89,8 @@ class Interface:
 def _pose(p: Any, i: int) -> Pose:
     if not isinstance(p, (list, tuple)) or len(p) != 3:
         raise ScenarioError(f"block #{i} pose must be (x, z, angle), got {checks.describe(p)}")
-    x = checks.number(p[0], f"block #{i} x", unit="m")
-    z = checks.number(p[1], f"block #{i} z", unit="m")
+    x = checks.coordinate(p[0], f"block #{i} x")
+    z = checks.coordinate(p[1], f"block #{i} z")
     a = checks.number(p[2], f"block #{i} angle", unit="rad")
     if not abs(a) < 0.5 * math.pi:
         raise ScenarioError(f"block #{i} angle must be within (-π/2, π/2) rad, got {a!r}: "

@@ -39,7 +39,8 @@ from rockbench.scenarios.motion import BaseMotion, Motion
 
 __all__ = ["Excitation", "AxialExcitation", "Components", "Free", "SinePulse", "CosinePulse",
            "Sinusoid", "Record", "TiltTable", "register_set_reader",
-           "STANDARD_GRAVITY", "MAX_BASE_ACCELERATION", "REPORT_GROUPS", "excitation_kinds",
+           "STANDARD_GRAVITY", "MAX_BASE_ACCELERATION", "MIN_RECORD_STEP", "MAX_RECORD_SPAN",
+           "REPORT_GROUPS", "excitation_kinds",
            "excitation_class", "excitation_from_table"]
 
 #: Conversion factor for records given in units of g.
@@ -48,6 +49,11 @@ STANDARD_GRAVITY = 9.80665
 #: Largest base acceleration accepted (m/s², about 10⁵ g): far beyond any ground motion,
 #: and a bound under which the solvers' squared accelerations cannot overflow.
 MAX_BASE_ACCELERATION = 1e6
+#: Shortest interval between a record's samples (s): 1 MHz, beyond any accelerograph or
+#: shake-table controller (they sample at 10 kHz at most).
+MIN_RECORD_STEP = 1e-6
+#: Longest record (s): a day; ground motions last minutes.
+MAX_RECORD_SPAN = 86400.0
 
 #: How reports group scenarios by their base motion (an excitation's ``report_group``).
 REPORT_GROUPS = ("free", "pulse", "sine", "record", "tilt")
@@ -656,6 +662,16 @@ class Record(AxialExcitation):
             raise ScenarioError("record contains NaN or infinite values")
         if np.any(np.diff(t) <= 0) or t[0] < 0:
             raise ScenarioError("record times must be >= 0 and strictly increasing")
+        steps = np.diff(t)
+        k = int(np.argmin(steps))
+        if steps[k] < MIN_RECORD_STEP:
+            raise ScenarioError(
+                f"record times: samples {k + 1} and {k + 2} are {steps[k]:.3g} s apart; the "
+                f"shortest interval accepted is {MIN_RECORD_STEP:g} s (1 MHz; times are in s)")
+        if t[-1] > MAX_RECORD_SPAN:
+            raise ScenarioError(
+                f"record times reach {t[-1]:.3g} s; a record may last at most "
+                f"{MAX_RECORD_SPAN:g} s (a day; times are in s)")
         scale = checks.number(self.scale, "record scale")
         checks.text(self.source, "record source")
         if self.units not in _UNITS:

@@ -23,9 +23,11 @@ import tomli_w
 from rockbench import checks
 from rockbench.errors import ScenarioError
 from rockbench.geometry import Block, Body, Geometry, Prism, Support, stack
+from rockbench.geometry.bodies import vertex_list
 from rockbench.geometry.builders import stack_poses
 from rockbench.scenarios.excitation import Excitation, excitation_from_table
 from rockbench.scenarios.model import Contact, Scenario
+from rockbench.scenarios.plausibility import warn_implausible
 from rockbench.tomlfile import read_toml
 
 __all__ = ["load_scenario", "save_scenario", "scenario_from_dict", "scenario_to_dict"]
@@ -50,7 +52,7 @@ def _blocks(raw_blocks: Any) -> tuple[list[Block], list[float]]:
         where = f"[[blocks]] #{i}"
         raw = checks.table(raw, where)
         checks.no_unknown(raw, _BLOCK, where)
-        offsets.append(checks.number(raw.pop("offset", 0.0), f"{where} offset", unit="m"))
+        offsets.append(checks.coordinate(raw.pop("offset", 0.0), f"{where} offset"))
         missing = {"width", "depth", "height"} - set(raw)
         if missing:
             raise ScenarioError(f"{where} is missing {', '.join(sorted(missing))}")
@@ -116,7 +118,7 @@ def _placed(raw_blocks: Any, raw_supports: Any) -> Geometry:
             if "vertices" not in raw:
                 raise ScenarioError(f"{where} is missing vertices")
             try:
-                supports.append(Support(raw["vertices"]))
+                supports.append(Support(vertex_list(raw["vertices"], "support vertices")))
             except ScenarioError as exc:
                 raise ScenarioError(f"{where}: {exc}") from None
     try:
@@ -256,6 +258,11 @@ def _geometry_tables(geo: Geometry) -> list[dict[str, Any]]:
 def load_scenario(path: str | Path) -> Scenario:
     """Read a scenario TOML file.
 
+    Values that are implausible but usable (a size that looks like millimetres, a
+    base acceleration above 3 g) are read, each with a
+    :class:`~rockbench.errors.PlausibilityWarning` naming the file
+    (:mod:`rockbench.scenarios.plausibility`).
+
     Raises
     ------
     ScenarioError
@@ -265,9 +272,11 @@ def load_scenario(path: str | Path) -> Scenario:
     path = Path(path)
     data = read_toml(path, ScenarioError, "scenario file")
     try:
-        return scenario_from_dict(data, source=path, default_name=path.stem)
+        scenario = scenario_from_dict(data, source=path, default_name=path.stem)
     except ScenarioError as exc:
         raise ScenarioError(f"{path}: {exc}") from None
+    warn_implausible(scenario, f"{path}: ")
+    return scenario
 
 
 def save_scenario(scenario: Scenario, path: str | Path) -> Path:

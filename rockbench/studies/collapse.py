@@ -46,9 +46,9 @@ until hi / lo − 1 ≤ ``rtol``. Collapse need not be monotonic in the
 amplitude (an overturning spectrum has safe islands above its minimum): the
 result is the first collapse boundary found from below, the analogue of a
 spectrum's minimum overturning acceleration. Every round of probes, over all
-assemblies, engines and frequencies at once, is one call of
-:func:`rockbench.runner.run_jobs` (parallel, isolated, Dask-capable), and
-every run is recorded in the store (kind ``collapse``).
+assemblies, engines and frequencies at once, is one campaign
+(:func:`rockbench.campaign.run_campaign`: parallel, isolated, Dask-capable jobs),
+and every run is recorded in the store (kind ``collapse``).
 """
 
 from __future__ import annotations

@@ -3,8 +3,8 @@
 Every record of a set is scaled to every intensity level of one measure
 (:mod:`rockbench.scenarios.intensity`: PGA, PGV, PGA/(g tan λ) or
 PGV p/(g tan λ)) and run on every method (each engine at each preset, and the
-analytic reference) through the one dispatcher (:func:`rockbench.runner.run_jobs`:
-isolated, parallel, Dask-capable). Each run lasts the record plus a settling
+analytic reference) through the campaign (:func:`rockbench.campaign.run_campaign`:
+isolated, parallel, Dask-capable jobs). Each run lasts the record plus a settling
 tail and is recorded in the results store as it finishes (kind ``fragility``,
 the record's provenance as its ``suite``); ``resume`` reuses the stored runs.
 
@@ -37,6 +37,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
@@ -46,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
-from rockbench.errors import RockbenchError
+from rockbench.errors import PlausibilityWarning, RockbenchError
 from rockbench.evaluation import RunMetrics
 from rockbench.fragility import (
     ExceedanceData,
@@ -449,6 +450,18 @@ class _Planned:
 
 
 
+def _warn_below_uplift(levels: Sequence[float], m: IntensityMeasure,
+                       rocking: RockingProperties, g: float) -> None:
+    """Warn when every PGA level is below uplift: nothing can exceed, which reads as safe."""
+    uplift = g * math.tan(rocking.lam)
+    if m is IntensityMeasure.PGA and max(levels) < uplift:
+        warnings.warn(
+            f"every intensity level (at most {max(levels):g} m/s²) is below the block's "
+            f"uplift acceleration g tan λ = {uplift:.3g} m/s² ({uplift / g:.3g} g), so no "
+            f"level can make it rock: levels are in m/s²; did you mean g?",
+            PlausibilityWarning, stacklevel=3)
+
+
 def _methods(opts: FragilityOptions) -> tuple[Method, ...]:
     engines = list(dict.fromkeys(e for e in opts.engines if e != REFERENCE))
     several = len(opts.presets) > 1
@@ -471,6 +484,7 @@ def _plan(opts: FragilityOptions, m: IntensityMeasure) -> tuple[tuple[Method, ..
     if not (math.isfinite(opts.theta_limit) and opts.theta_limit > 0):
         raise RockbenchError(f"theta_limit must be > 0 (a fraction of λ), got "
                              f"{opts.theta_limit!r}")
+    _warn_below_uplift(opts.levels, m, rocking, base.g)
     methods = _methods(opts)
     planned = []
     for rec in opts.records:
