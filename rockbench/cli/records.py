@@ -58,7 +58,7 @@ def execute_records(args: argparse.Namespace) -> int:
                     "PGA (g)", "PGV (m/s)", "provenance"):
             table.add_column(col, overflow="fold", no_wrap=col in ("record", "comp.", "year"))
         for r in s.records:
-            table.add_row(r.name, escape(r.event), str(r.year), escape(r.station),
+            table.add_row(r.name, escape(r.event), str(r.year or ""), escape(r.station),
                           escape(r.component), f"{r.dt:g}", f"{r.duration:.2f}",
                           f"{r.pga / STANDARD_GRAVITY:.3f}", f"{r.pgv:.3f}", escape(r.provenance))
         console.print(table)

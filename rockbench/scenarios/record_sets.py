@@ -15,6 +15,9 @@ registry, installed with ``pip install 'rockbench[records]'``:
     and the Northridge-05 aftershock at Sylmar (RSN1690). Vertical components
     are left out (rocking here is driven horizontally).
 
+One's own records, a folder of record files or a manifest, are a set too, named by
+their path (:mod:`rockbench.scenarios.user_records`).
+
 Every record is named as PEER names its file, e.g. ``RSN953_NORTHR_MUL009``.
 Accelerations are converted from g with the standard gravity, and each record
 becomes a :class:`~rockbench.scenarios.excitation.Record`: linear between
@@ -52,6 +55,7 @@ from rockbench.scenarios.intensity import (
     peak_ground_velocity,
     scale_factor,
 )
+from rockbench.scenarios.user_records import UserSet, is_path, read_user_set
 
 __all__ = ["RecordInfo", "RecordSet", "UnavailableRecordSet", "RecordSetUnavailable",
            "SetRecord", "RECORDS_EXTRA", "record_set_names", "record_sets", "get_record_set",
@@ -196,7 +200,8 @@ class SetRecord(Record):
         The table gives ``set`` and ``record`` (strings) and either ``scale``
         (a number, default 1) or ``measure`` and ``intensity`` (see
         :func:`load_record`); ``rocking`` and ``g`` serve the normalised measures.
-        ``source`` is not used (the record comes from its set).
+        A ``set`` given as a path (one's own records,
+        :mod:`rockbench.scenarios.user_records`) is relative to ``source``'s folder.
         """
         data = cls.read_fields(table, required=("set", "record"))
         name = checks.text(data["set"], "record set")
@@ -212,7 +217,8 @@ class SetRecord(Record):
             measure = checks.text(measure, "record intensity measure")
         return load_record(name, record, scale=checks.number(data.get("scale", 1.0),
                                                              "record scale"),
-                           measure=measure, intensity=intensity, rocking=rocking, g=g)
+                           measure=measure, intensity=intensity, rocking=rocking, g=g,
+                           base=None if source is None else Path(source).parent)
 
     def to_table(self) -> dict[str, Any]:
         """``type``, ``set``, ``record`` and the resolved ``scale`` (a target intensity is
@@ -375,6 +381,29 @@ def _loaded(name: str) -> tuple[RecordSet, tuple[SetRecord, ...]]:
             tuple(records))
 
 
+@functools.cache
+def _loaded_user(uset: UserSet) -> tuple[RecordSet, tuple[SetRecord, ...]]:
+    """A user's set read and integrated once per content (its digest is part of the key)."""
+    infos, records = [], []
+    for r in uset.records:
+        rec = Record.from_file(r.path, units=r.units)
+        times, acc = rec.times.copy(), rec.accelerations * r.scale
+        times.flags.writeable = False
+        acc.flags.writeable = False
+        srec = SetRecord(times, acc, record_set=uset.name, record_name=r.name)
+        records.append(srec)
+        steps = np.diff(times)
+        infos.append(RecordInfo(
+            set=uset.name, name=r.name, event=r.event, year=r.year, magnitude=None,
+            station=r.station, component=r.component, dt=float(np.min(steps)),
+            duration=float(times[-1]), npts=int(times.size),
+            pga=peak_ground_acceleration(srec), pgv=peak_ground_velocity(srec), pulse=None,
+            provenance=f"file {r.path} ({rec.units}, scale {r.scale:g}); set digest "
+                       f"{uset.digest}"))
+    return (RecordSet(uset.name, uset.description, "local files", uset.digest, tuple(infos)),
+            tuple(records))
+
+
 def record_sets() -> tuple[RecordSet | UnavailableRecordSet, ...]:
     """Every known record set: the catalogue of each installed one, or why it is unavailable.
 
@@ -399,26 +428,43 @@ def _get(name: str) -> RecordSet:
             f"pip install 'rockbench[{RECORDS_EXTRA}]'") from exc
 
 
-def get_record_set(name: str) -> RecordSet:
-    """The installed record set called ``name``.
+def get_record_set(name: str, base: Path | None = None) -> RecordSet:
+    """The installed record set called ``name``, or one's own set at the path ``name``.
+
+    Parameters
+    ----------
+    name : str
+        A set of :func:`record_set_names`, or a folder of record files or a manifest
+        (:mod:`rockbench.scenarios.user_records`).
+    base : Path, optional
+        The folder a relative path starts from (default: the working folder).
 
     Raises
     ------
     ScenarioError
-        For an unknown name (with the closest known one).
+        For an unknown name (with the closest known one), or a set of files that
+        cannot be read.
     RecordSetUnavailable
         When its package is missing, with the pip hint.
     """
+    return _set_and_records(name, base)[0]
+
+
+def _set_and_records(name: str, base: Path | None) -> tuple[RecordSet, tuple[SetRecord, ...]]:
+    if name not in _SOURCES and is_path(name, base):
+        return _loaded_user(read_user_set(name, base))
     if name not in _SOURCES:
         close = difflib.get_close_matches(str(name), list(_SOURCES), n=1)
         hint = f"; did you mean {close[0]!r}?" if close else "."
         raise ScenarioError(f"unknown record set {name!r}{hint} Known sets: "
-                            f"{', '.join(_SOURCES)}")
+                            f"{', '.join(_SOURCES)}; or give the path of a folder of "
+                            f".AT2/.csv records or of a records.toml manifest")
     missing = _missing(name)
     if missing is not None:
         raise RecordSetUnavailable(f"record set {name!r} is unavailable: {missing.reason}; "
                                    f"install it with: {missing.install_hint}")
-    return _get(name)
+    _get(name)  # the catalogue, or RecordSetUnavailable with the pip hint
+    return _loaded(name)
 
 
 def _index(rset: RecordSet, name: str) -> int:
@@ -435,7 +481,8 @@ def _index(rset: RecordSet, name: str) -> int:
 
 def load_record(set_name: str, record_name: str, *, scale: float = 1.0,
                 measure: IntensityMeasure | str | None = None, intensity: float | None = None,
-                rocking: RockingProperties | None = None, g: float = 9.81) -> SetRecord:
+                rocking: RockingProperties | None = None, g: float = 9.81,
+                base: Path | None = None) -> SetRecord:
     """A record of a set as an excitation, scaled by a factor or to a target intensity.
 
     Parameters
@@ -455,6 +502,8 @@ def load_record(set_name: str, record_name: str, *, scale: float = 1.0,
         The block's rocking constants, needed by the normalised measures.
     g : float
         Gravity of the normalised measures (m/s²; use the scenario's).
+    base : Path, optional
+        The folder a set given by a relative path starts from.
 
     Returns
     -------
@@ -462,18 +511,18 @@ def load_record(set_name: str, record_name: str, *, scale: float = 1.0,
         Baseline-corrected once, with exactly consistent acceleration, velocity
         and displacement; a scale (or target) of 0 gives no motion at all.
     """
-    rset = get_record_set(set_name)
-    base = _loaded(rset.name)[1][_index(rset, record_name)]
+    rset, records = _set_and_records(set_name, base)
+    rec = records[_index(rset, record_name)]
     if (measure is None) != (intensity is None):
         raise ScenarioError("give both 'measure' and 'intensity' to scale a record to a target")
     if intensity is not None:
         if scale != 1.0:
             raise ScenarioError("give either 'scale' or 'measure' and 'intensity', not both")
         assert measure is not None
-        scale = scale_factor(base, measure, intensity, rocking, g)
+        scale = scale_factor(rec, measure, intensity, rocking, g)
     if not math.isfinite(float(scale)):
         raise ScenarioError(f"record scale must be finite, got {scale!r}")
-    return dataclasses.replace(base, scale=float(scale))
+    return dataclasses.replace(rec, scale=float(scale))
 
 
 register_set_reader(SetRecord.from_table)
