@@ -28,6 +28,7 @@ from rockbench.errors import RockbenchError
 
 if TYPE_CHECKING:
     from rockbench.scenarios import Scenario
+    from rockbench.scenarios.floor import BuildingMode
 
 __all__ = ["COMMANDS", "configure_fragility", "execute_fragility"]
 
@@ -54,6 +55,11 @@ def configure_fragility(p: argparse.ArgumentParser) -> None:
                    help="record set (see `rockbench records`)")
     p.add_argument("--records", default=None, metavar="A,B",
                    help="only these records of the set (default: all)")
+    p.add_argument("--floor", default=None, metavar="T[,ZETA[,GAMMA_PHI]]",
+                   help="shake the block with the floor motion of a linear building mode "
+                        "instead of the ground's: period T (s), damping ratio (default 0.05) "
+                        "and participation × mode shape at the block's height (default 1); "
+                        "a pga level is then a peak floor acceleration")
     p.add_argument("--measure", default="pga-uplift",
                    choices=[m.value for m in IntensityMeasure],
                    help="intensity measure of the levels: PGA (m/s²), PGV (m/s), "
@@ -84,6 +90,19 @@ def configure_fragility(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar or summary")
 
 
+def _building_mode(text: str) -> BuildingMode:
+    from rockbench.scenarios.floor import BuildingMode
+
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if not 1 <= len(values) <= 3:
+        raise RockbenchError(f"--floor takes T[,ZETA[,GAMMA_PHI]] (s, ratio, factor), got "
+                             f"{text!r}")
+    return BuildingMode(*values)
+
+
 def _scenario(args: argparse.Namespace) -> Scenario:
     from rockbench.scenarios import Block, Scenario, get_scenario, single
 
@@ -104,6 +123,7 @@ def execute_fragility(args: argparse.Namespace) -> int:
     from rockbench.report.fragility_report import write_report
     from rockbench.studies.fragility import (
         FragilityOptions,
+        floor_records,
         parse_levels,
         run_fragility,
         set_records,
@@ -114,6 +134,12 @@ def execute_fragility(args: argparse.Namespace) -> int:
     names = ([n.strip() for n in args.records.split(",") if n.strip()]
              if args.records else None)
     records = set_records(args.record_set, names)
+    set_name = args.record_set
+    if args.floor:
+        mode = _building_mode(args.floor)
+        records = floor_records(records, mode)
+        set_name += (f", floor motions (T = {mode.period:g} s, ζ = {mode.damping:g}, "
+                     f"Γφ = {mode.amplification:g})")
     engines = [e for e in selected_engines(args.engine) if e != REFERENCE]
     settings = engine_settings(argparse.Namespace(**{**vars(args), "preset": None}), engines)
     preset = args.preset or "accurate"
@@ -131,7 +157,7 @@ def execute_fragility(args: argparse.Namespace) -> int:
         engines=engines, presets=[preset], overrides=overrides, theta_limit=args.theta_limit,
         settle=args.settle, output_rate=args.output_rate,
         execution=execution_options(args, isolate=not args.no_isolate), resume=args.resume,
-        db=None if args.no_db else Path(args.db), set_name=args.record_set,
+        db=None if args.no_db else Path(args.db), set_name=set_name,
         n_resamples=args.resamples, confidence=args.confidence,
         command=command_line(args))
 

@@ -65,11 +65,12 @@ from rockbench.method import REFERENCE, Method
 from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario
 from rockbench.scenarios.excitation import Record
+from rockbench.scenarios.floor import BuildingMode, floor_record
 from rockbench.trajectory import Status
 
 __all__ = ["KIND", "LimitState", "StudyRecord", "FragilityOptions", "FragilityRun",
            "LimitStateCurve", "MethodCost", "RecordIsland", "FragilityResult", "set_records",
-           "parse_levels", "run_fragility", "study_rocking", "DEFAULT_SETTLE"]
+           "floor_records", "parse_levels", "run_fragility", "study_rocking", "DEFAULT_SETTLE"]
 
 #: The store's ``kind`` of runs made by this study.
 KIND = "fragility"
@@ -144,6 +145,17 @@ def set_records(set_name: str, names: Sequence[str] | None = None) -> tuple[Stud
     infos = rset.records if names is None else tuple(rset.record(n) for n in names)
     return tuple(StudyRecord(i.name, load_record(rset.name, i.name), i.provenance, i.event,
                              i.station) for i in infos)
+
+
+def floor_records(records: Sequence[StudyRecord], mode: BuildingMode
+                  ) -> tuple[StudyRecord, ...]:
+    """The records as the floor of ``mode`` feels them (:mod:`rockbench.scenarios.floor`).
+
+    The study then scales the floor motions: a ``pga`` level is a peak floor acceleration.
+    """
+    tag = f"floor of T = {mode.period:g} s, ζ = {mode.damping:g}, Γφ = {mode.amplification:g}"
+    return tuple(dataclasses.replace(r, record=floor_record(r.record, mode),
+                                     provenance=f"{r.provenance}; {tag}") for r in records)
 
 
 def parse_levels(text: str) -> tuple[float, ...]:
