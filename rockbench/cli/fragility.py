@@ -65,7 +65,12 @@ def configure_fragility(p: argparse.ArgumentParser) -> None:
                    help="intensity measure of the levels: PGA (m/s²), PGV (m/s), "
                         "PGA/(g tan λ) (Housner 1963's uplift ratio, default) or "
                         "PGV p/(g tan λ) (the velocity analogue, after Dimitrakopoulos & "
-                        "DeJong 2012)")
+                        "DeJong 2012), Sa(T, ζ) (m/s², with --period) or the Arias "
+                        "intensity (m/s)")
+    p.add_argument("--period", type=float, default=None, metavar="T",
+                   help="period of the sa measure (s)")
+    p.add_argument("--damping", type=float, default=0.05, metavar="ZETA",
+                   help="damping ratio of the sa measure (default 0.05)")
     p.add_argument("--levels", required=True, metavar="A,B,C|START:STOP:N",
                    help="intensity levels: a comma list or N evenly spaced from START to STOP")
     add_engine_arguments(p, default="analytic")
@@ -152,8 +157,14 @@ def execute_fragility(args: argparse.Namespace) -> int:
     check_output_path(out / "runs.csv", "--out")
     if not args.no_db:
         check_output_path(args.db, "--db")
+    oscillator = None
+    if args.period is not None:
+        from rockbench.scenarios.oscillator import Oscillator
+
+        oscillator = Oscillator(args.period, args.damping)
     opts = FragilityOptions(
         scenario=scenario, records=records, levels=levels, measure=args.measure,
+        oscillator=oscillator,
         engines=engines, presets=[preset], overrides=overrides, theta_limit=args.theta_limit,
         settle=args.settle, output_rate=args.output_rate,
         execution=execution_options(args, isolate=not args.no_isolate), resume=args.resume,

@@ -40,7 +40,12 @@ from rockbench.report.figures import method_styles
 from rockbench.report.html import write_document
 from rockbench.report.tables import Cell, Table
 from rockbench.store import jsonable
-from rockbench.studies.fragility import FragilityResult, LimitState, LimitStateCurve
+from rockbench.studies.fragility import (
+    FragilityOptions,
+    FragilityResult,
+    LimitState,
+    LimitStateCurve,
+)
 
 __all__ = ["write_report", "fragility_figure", "CITATION"]
 
@@ -242,6 +247,12 @@ def _write_runs(result: FragilityResult, out: Path) -> list[Path]:
     return [csv_path, json_path]
 
 
+def _oscillator(opts: FragilityOptions) -> str:
+    """The period and damping of a spectral measure, for the report's header."""
+    o = opts.oscillator
+    return "" if o is None else f", T = {o.period:g} s, ζ = {o.damping:g}"
+
+
 def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = True) -> list[Path]:
     """Write ``index.html``, ``report.md``, ``runs.csv``, ``runs.json`` and ``figures/``.
 
@@ -290,7 +301,8 @@ def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = Tr
         ("Scenario", f"{opts.scenario.name} ({opts.scenario.n_blocks} block(s), λ = "
                      f"{critical_angle(opts.scenario.geometry):.4f} rad)"),
         ("Record set", f"{opts.set_name or 'custom'} ({len(result.records)} records)"),
-        ("Intensity", f"{result.measure.label} at {', '.join(f'{v:g}' for v in opts.levels)}"),
+        ("Intensity", f"{result.measure.label}{_oscillator(opts)} at "
+                      f"{', '.join(f'{v:g}' for v in opts.levels)}"),
         ("Runs", f"{len(result.runs)}: {result.ran} run now, {result.reused} reused (--resume); "
                  f"each the record plus {opts.settle:g} s, sampled at {opts.output_rate:g}/s"),
         ("Wall time", f"{result.wall_time:.1f} s on {opts.execution.jobs} worker(s); overhead "

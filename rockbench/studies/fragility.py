@@ -66,6 +66,7 @@ from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario
 from rockbench.scenarios.excitation import Record
 from rockbench.scenarios.floor import BuildingMode, floor_record
+from rockbench.scenarios.oscillator import Oscillator
 from rockbench.trajectory import Status
 
 __all__ = ["KIND", "LimitState", "StudyRecord", "FragilityOptions", "FragilityRun",
@@ -218,6 +219,8 @@ class FragilityOptions:
         motion times zero: nothing moves; it is shown, not fitted).
     measure : IntensityMeasure or str
         The intensity measure of the levels.
+    oscillator : Oscillator or None
+        The period and damping of the ``sa`` measure.
     engines : list of str
         Engines to run besides the analytic reference (always run).
     presets : list of str
@@ -248,6 +251,7 @@ class FragilityOptions:
     records: Sequence[StudyRecord]
     levels: Sequence[float]
     measure: IntensityMeasure | str = IntensityMeasure.PGA_UPLIFT
+    oscillator: Oscillator | None = None
     engines: list[str] = field(default_factory=list)
     presets: list[str] = field(default_factory=lambda: ["accurate"])
     overrides: dict[str, dict[str, Any]] = field(default_factory=dict)
@@ -496,12 +500,14 @@ def _plan(opts: FragilityOptions, m: IntensityMeasure) -> tuple[tuple[Method, ..
     if not (math.isfinite(opts.theta_limit) and opts.theta_limit > 0):
         raise RockbenchError(f"theta_limit must be > 0 (a fraction of λ), got "
                              f"{opts.theta_limit!r}")
+    if m is IntensityMeasure.SA and opts.oscillator is None:
+        raise RockbenchError("the sa measure needs the oscillator's period (--period)")
     _warn_below_uplift(opts.levels, m, rocking, base.g)
     methods = _methods(opts)
     planned = []
     for rec in opts.records:
         for level in opts.levels:
-            k = scale_factor(rec.record, m, level, rocking, base.g)
+            k = scale_factor(rec.record, m, level, rocking, base.g, opts.oscillator)
             exc = dataclasses.replace(rec.record, scale=rec.record.scale * k)
             sc = dataclasses.replace(base, name=f"{base.name}|{rec.name}|{m.value}={level:g}",
                                      excitation=exc, duration=exc.end_time + opts.settle,
