@@ -8,6 +8,7 @@ of real record sets are skipped, with the reason, when their package is.
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import math
 
@@ -30,6 +31,7 @@ from rockbench.scenarios import (
     scenario_to_dict,
     stack,
 )
+from rockbench.scenarios.intensity import IntensityMeasure
 from rockbench.store import Store, scenario_hash
 from rockbench.studies.fragility import (
     KIND,
@@ -284,3 +286,18 @@ def test_a_stack_is_scaled_by_the_uplift_of_the_stack_as_one_body():
     # below the stack's uplift threshold nothing lifts (the stack's λ is the smallest here)
     assert mono.lam < min(lower.rocking(sc.g).lam, upper.rocking(sc.g).lam)
     assert all(r.metrics.peaks == (0.0, 0.0) for r in low)
+
+
+def test_medians_are_given_in_physical_units_and_methods_with_their_preset(tmp_path):
+    # slenderness 0.2: tan λ = 0.2 exactly, so PGA/(g tan λ) = 1 is a PGA of 0.2 g
+    res = study(block_scenario(1.0), noise_records(2), (1.0, 3.0), engines=["pymunk"],
+                presets=["fast"], settle=1.0)
+    assert res.in_units(1.0) == f"{0.2 * res.options.scenario.g:.3g} m/s² (0.2 g)"
+    pga = dataclasses.replace(res, measure=IntensityMeasure.PGA)
+    assert pga.in_units(res.options.scenario.g) == "1 g"
+    assert dataclasses.replace(res, measure=IntensityMeasure.PGV).in_units(1.0) == ""
+    assert [m.label for m in res.methods] == ["analytic", "pymunk[fast]"]
+    write_report(res, tmp_path)
+    rows = (tmp_path / "runs.csv").read_text().splitlines()
+    assert rows[0].split(",")[:5] == ["record", "level", "scale", "method", "preset"]
+    assert {r.preset for r in res.runs} == {"", "fast"}

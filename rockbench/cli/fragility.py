@@ -185,8 +185,9 @@ def execute_fragility(args: argparse.Namespace) -> int:
                 text = "no completed run"
             elif fit.ok:
                 lo, hi = boot.median_interval
-                text = (f"median {fit.median:.3g} [{lo:.3g}, {hi:.3g}], "
-                        f"dispersion {fit.dispersion:.3g}")
+                phys = result.in_units(fit.median)
+                text = (f"median {fit.median:.3g}{f' = {phys}' if phys else ''} "
+                        f"[{lo:.3g}, {hi:.3g}], dispersion {fit.dispersion:.3g}")
             else:
                 text = fit.status.value
             print(f"{c.method:>18} {c.state.value:<12} {text}")

@@ -407,5 +407,5 @@ def write_assembly_report(out: Path, scenarios: Sequence[Scenario],
         "voussoir arches) in physics engines and the DEM, against the static collapse "
         "factor and mechanism of rigid-block limit analysis."], sections, CITATION)
     files.append(_write_csv(out / "results.csv", tilting, collapse))
-    html, md = write_document(doc, out, embed=embed)
+    html, md = write_document(doc, out, embed=embed, data=("results.csv",))
     return files + [md, html]

@@ -286,5 +286,6 @@ def write_calibration_report(cal: Calibration, options: ReportOptions) -> list[P
         intro=["Which settings of this engine reproduce the analytic reference, and at "
                "what cost? Every setting the search tried, on every calibration case."],
         sections=[settings, search], citation=citation())
-    index, md = write_document(doc, out, embed=options.embed_figures)
+    index, md = write_document(doc, out, embed=options.embed_figures,
+                               data=("calibration.csv",))
     return [index, md, write_calibration_csv(cal, out / "calibration.csv"), fig]

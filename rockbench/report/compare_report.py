@@ -299,7 +299,8 @@ def _write_document(result: CompareResult, options: ReportOptions,
                 "paper's, its published values in italics. Raw numbers: results.csv (one row "
                 "per scenario × method); raw time histories: trajectories/.")],
         sections=sections, citation=citation())
-    return list(write_document(doc, out, embed=options.embed_figures))
+    return list(write_document(doc, out, embed=options.embed_figures,
+                              data=("results.csv", "trajectories/")))
 
 
 def _group_intro(group: str, scen: Sequence[Scenario]) -> str:

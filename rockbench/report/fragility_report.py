@@ -39,6 +39,7 @@ from rockbench.report.document import (
 from rockbench.report.figures import method_styles
 from rockbench.report.html import write_document
 from rockbench.report.tables import Cell, Table
+from rockbench.scenarios.excitation import STANDARD_GRAVITY
 from rockbench.store import jsonable
 from rockbench.studies.fragility import (
     FragilityOptions,
@@ -139,8 +140,8 @@ def _fit_table(result: FragilityResult, state: LimitState, number: int) -> Table
                  f"θ/θ_analytic with its {conf} paired bootstrap interval (the records "
                  "resampled jointly for both methods); the cost of the method over the whole "
                  "study. 'extrapolated': the median lies outside the tested levels."),
-        columns=["method", "θ", f"θ {conf}", "β", f"β {conf}", "θ / θ_analytic",
-                 f"ratio {conf}", "runs", "no outcome", "CPU time (s)"])
+        columns=["method", "θ", "θ in units", f"θ {conf}", "β", f"β {conf}",
+                 "θ / θ_analytic", f"ratio {conf}", "runs", "no outcome", "CPU time (s)"])
     costs = {c.method: c for c in result.costs}
     for meth in result.methods:
         c = result.curve(meth.label, state)
@@ -149,10 +150,11 @@ def _fit_table(result: FragilityResult, state: LimitState, number: int) -> Table
         cells: list[Cell | str] = [Cell(meth.label, kind="head")]
         boot = c.bootstrap
         if boot is None:
-            cells += [Cell("no completed run", kind="crashed")] + ["–"] * 5
+            cells += [Cell("no completed run", kind="crashed")] + ["–"] * 6
         elif boot.fit.ok:
             med = _num(boot.fit.median) + (" (extrapolated)" if boot.fit.extrapolated else "")
-            cells += [Cell(med, kind), Cell(_interval(boot.median_interval), kind),
+            cells += [Cell(med, kind), Cell(result.in_units(boot.fit.median) or "–", kind),
+                      Cell(_interval(boot.median_interval), kind),
                       Cell(_num(boot.fit.dispersion), kind),
                       Cell(_interval(boot.dispersion_interval), kind)]
             cmp = c.comparison
@@ -163,7 +165,7 @@ def _fit_table(result: FragilityResult, state: LimitState, number: int) -> Table
             else:
                 cells += ["–", "–"]
         else:
-            cells += [Cell(_fit_text(boot.fit), kind), "–", "–", "–", "–", "–"]
+            cells += [Cell(_fit_text(boot.fit), kind), "–", "–", "–", "–", "–", "–"]
         cells += [str(cost.runs), str(cost.failed), f"{cost.cpu_time:.2f}"]
         t.add_row(cells)
     return t
@@ -212,12 +214,12 @@ def _islands_paragraph(curves: Sequence[LimitStateCurve], theta_limit: float) ->
 def _records_table(result: FragilityResult, number: int) -> Table:
     t = Table(key="records", title=f"Table {number}. Records used",
               caption="Each record at scale 1 (baseline-corrected once), with its provenance.",
-              columns=["record", "event", "station", "duration (s)", "PGA (m/s²)",
+              columns=["record", "event", "station", "duration (s)", "PGA (g)",
                        "PGV (m/s)", "provenance"])
     for r in result.records:
         rec = r.record
         t.add_row([Cell(r.name, kind="head"), r.event or "–", r.station or "–",
-                   f"{rec.end_time:.2f}", f"{rec.peak_acceleration():.3g}",
+                   f"{rec.end_time:.2f}", f"{rec.peak_acceleration() / STANDARD_GRAVITY:.3g}",
                    f"{rec.peak_velocity():.3g}", r.provenance or "–"])
     return t
 
@@ -227,7 +229,8 @@ def _write_runs(result: FragilityResult, out: Path) -> list[Path]:
     for r in result.runs:
         m = r.metrics
         rows.append({"record": r.record, "level": r.level, "scale": r.scale,
-                     "method": r.method, "status": m.status.value, "overturned": r.overturned,
+                     "method": r.method, "preset": r.preset, "status": m.status.value,
+                     "overturned": r.overturned,
                      "rocking_exceeded": r.rocking,
                      "peak": max((p for p in m.peaks if p is not None), default=None),
                      "wall_time": m.wall_time, "cpu_time": m.cpu_time,
@@ -327,5 +330,6 @@ def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = Tr
                "likelihood (Baker 2015) with bootstrap intervals; each engine's median is "
                "compared with the analytic one by a paired bootstrap over the records."],
         sections=sections, citation=CITATION)
-    index, md = write_document(doc, out, embed=embed_figures)
+    index, md = write_document(doc, out, embed=embed_figures,
+                               data=("runs.csv", "runs.json"))
     return [index, md, *files]

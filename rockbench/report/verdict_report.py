@@ -241,5 +241,5 @@ def write_verify_report(result: VerifyResult, options: ReportOptions) -> list[Pa
         intro=["For each method (an engine at a preset): can it be trusted on these "
                "scenarios, against which reference, and which is the cheapest that is right?"],
         sections=sections, citation=citation())
-    index, md = write_document(doc, out, embed=options.embed_figures)
+    index, md = write_document(doc, out, embed=options.embed_figures, data=("verdict.csv",))
     return [index, md, _write_csv(result, out / "verdict.csv")]

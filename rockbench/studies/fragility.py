@@ -288,6 +288,8 @@ class FragilityRun:
         The two limit states' outcomes (None: the run did not complete).
     reused : bool
         Taken from the store rather than run now.
+    preset : str
+        The engine's preset ("" for the analytic reference).
     """
 
     record: str
@@ -298,6 +300,7 @@ class FragilityRun:
     overturned: bool | None
     rocking: bool | None
     reused: bool
+    preset: str = ""
 
     def outcome(self, state: LimitState) -> bool | None:
         """The outcome of one limit state."""
@@ -427,6 +430,26 @@ class FragilityResult:
     reused: int
     wall_time: float
 
+    def in_units(self, value: float) -> str:
+        """A level of the study's measure in physical units ("" when it already is one).
+
+        PGA/(g tan λ) × g tan λ is a PGA (m/s², and in g), PGV p/(g tan λ) × g tan λ / p a
+        PGV (m/s), with the block's constants (:func:`study_rocking`); a PGA or Sa is also
+        given in g.
+        """
+        if not math.isfinite(value):
+            return ""
+        rocking, g = study_rocking(self.options.scenario), self.options.scenario.g
+        uplift = g * math.tan(rocking.lam)
+        m = self.measure
+        if m is IntensityMeasure.PGA_UPLIFT:
+            return f"{value * uplift:.3g} m/s² ({value * uplift / g:.3g} g)"
+        if m is IntensityMeasure.PGV_ROCKING:
+            return f"{value * uplift / rocking.p:.3g} m/s"
+        if m in (IntensityMeasure.PGA, IntensityMeasure.SA):
+            return f"{value / g:.3g} g"
+        return ""
+
     def curve(self, method: str, state: LimitState) -> LimitStateCurve:
         """The curve of one method and limit state."""
         for c in self.curves:
@@ -480,9 +503,9 @@ def _warn_below_uplift(levels: Sequence[float], m: IntensityMeasure,
 
 def _methods(opts: FragilityOptions) -> tuple[Method, ...]:
     engines = list(dict.fromkeys(e for e in opts.engines if e != REFERENCE))
-    several = len(opts.presets) > 1
+    # labels name the preset (pymunk[fast]): a fragility read without it is not reproducible
     return (Method.reference(),) + tuple(
-        Method.of(e, {"preset": p, **opts.overrides.get(e, {})}, qualified=several)
+        Method.of(e, {"preset": p, **opts.overrides.get(e, {})}, qualified=True)
         for e in engines for p in opts.presets)
 
 
@@ -560,7 +583,8 @@ def run_fragility(opts: FragilityOptions,
 def _run(p: _Planned, m: RunMetrics, theta_limit: float, *, reused: bool) -> FragilityRun:
     return FragilityRun(p.record.name, p.level, p.scale, p.method.label, m,
                         LimitState.OVERTURNING.exceeded(m, theta_limit),
-                        LimitState.ROCKING.exceeded(m, theta_limit), reused)
+                        LimitState.ROCKING.exceeded(m, theta_limit), reused,
+                        p.method.preset)
 
 
 def _table(opts: FragilityOptions, runs: Sequence[FragilityRun], method: str,
