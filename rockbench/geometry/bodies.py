@@ -31,6 +31,14 @@ from rockbench.geometry.rocking import RockingProperties, rocking_about
 __all__ = ["Block", "Prism", "Support", "Body", "vertex_list"]
 
 
+def _mass(mass: float | None, density: float | None, volume: float) -> float:
+    """The mass given, or the density times the volume (exactly one is given)."""
+    if mass is not None:
+        return mass
+    assert density is not None  # exactly one of the two (_mass_or_density)
+    return density * volume
+
+
 def _mass_or_density(density: Any, mass: Any) -> tuple[float | None, float | None]:
     if (density is None) == (mass is None):
         raise ScenarioError("block needs exactly one of 'density' and 'mass'")
@@ -88,10 +96,7 @@ class Block:
     @property
     def m(self) -> float:
         """Mass in kg."""
-        if self.mass is not None:
-            return self.mass
-        assert self.density is not None  # exactly one of the two (_mass_or_density)
-        return self.density * self.volume
+        return _mass(self.mass, self.density, self.volume)
 
     @property
     def b(self) -> float:
@@ -246,10 +251,7 @@ class Prism:
     @property
     def m(self) -> float:
         """Mass in kg."""
-        if self.mass is not None:
-            return self.mass
-        assert self.density is not None  # exactly one of the two (_mass_or_density)
-        return self.density * self.volume
+        return _mass(self.mass, self.density, self.volume)
 
     @property
     def centroid(self) -> np.ndarray:

@@ -35,7 +35,7 @@ import numpy as np
 
 from rockbench import checks
 from rockbench.errors import ScenarioError
-from rockbench.scenarios.motion import BaseMotion, Motion
+from rockbench.scenarios.motion import BaseMotion, Motion, Still
 
 __all__ = ["Excitation", "AxialExcitation", "Components", "Free", "SinePulse", "CosinePulse",
            "Sinusoid", "Record", "TiltTable", "register_set_reader",
@@ -236,19 +236,12 @@ class Free(AxialExcitation):
     kind: ClassVar[str] = "free"
     report_group: ClassVar[str] = "free"
 
-    def acceleration(self, t: ArrayLike) -> ArrayLike:
-        return np.zeros_like(np.asarray(t, float)) + 0.0
-
-    velocity = acceleration
-    displacement = acceleration
-
-    @property
-    def end_time(self) -> float:
-        return 0.0
-
-    @property
-    def is_free(self) -> bool:
-        return True
+    # the motion of an axis that does not move
+    acceleration = Still.acceleration
+    velocity = Still.velocity
+    displacement = Still.displacement
+    end_time = Still.end_time
+    is_free = Still.is_free
 
     def scalar_acceleration(self) -> Callable[[float], float]:
         return lambda t: 0.0
