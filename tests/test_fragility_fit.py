@@ -340,9 +340,9 @@ def test_intensity_errors():
         pytest.approx(0.01 * 4.0 * math.pi, rel=1e-5)
     with pytest.raises(ScenarioError, match="sine or cosine pulse"):
         pulse_ratios(Sinusoid(frequency=2.0, amplitude=0.01), B_ROCK)
-    assert [(m.value, m.units, m.needs_block) for m in IntensityMeasure] == [
-        ("pga", "m/s2", False), ("pgv", "m/s", False), ("pga-uplift", "1", True),
-        ("pgv-rocking", "1", True)]
+    assert [(m.value, m.units, m.needs_block, m.degree) for m in IntensityMeasure] == [
+        ("pga", "m/s2", False, 1), ("pgv", "m/s", False, 1), ("pga-uplift", "1", True, 1),
+        ("pgv-rocking", "1", True, 1), ("sa", "m/s2", False, 1), ("arias", "m/s", False, 2)]
     assert IntensityMeasure.parse(" PGA ") is IntensityMeasure.PGA
     assert IntensityMeasure.PGA_UPLIFT.label == "PGA / (g tan λ)"
 
