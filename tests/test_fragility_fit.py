@@ -394,3 +394,22 @@ def test_comparison_with_a_degenerate_fit_has_no_ratio():
         compare_medians(IDA_LEVELS, ida(cap), ida(cap)[:, :3])
     with pytest.raises(FragilityError, match="shape"):
         compare_medians(IDA_LEVELS, ida(cap), ida(cap[:5]))
+
+
+def test_probability_at_a_design_level_and_its_interval_cover_the_truth():
+    # P(IM = a) = Φ(ln(a/θ)/β) of the fit; over repeated experiments its 90 % interval holds
+    # the true probability about 90 % of the time
+    level, trials, hits = 1.0, 200, 0
+    truth = float(norm.cdf(math.log(level / THETA) / BETA))
+    for k in range(trials):
+        boot = bootstrap_fragility(draw(20, seed=3000 + k), n_resamples=200, confidence=0.9,
+                                   seed=k)
+        at = boot.probability_at(level)
+        assert at.probability == pytest.approx(
+            norm.cdf(math.log(level / boot.fit.median) / boot.fit.dispersion), rel=1e-12)
+        hits += at.interval[0] <= truth <= at.interval[1]
+    assert 0.82 <= hits / trials <= 0.97
+    with pytest.raises(FragilityError, match="design level"):
+        boot.probability_at(0.0)
+    separated = bootstrap_fragility(ExceedanceData((1.0, 2.0), (5, 5), (0, 5)))
+    assert math.isnan(separated.probability_at(1.5).probability)

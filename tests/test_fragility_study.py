@@ -291,7 +291,7 @@ def test_a_stack_is_scaled_by_the_uplift_of_the_stack_as_one_body():
 def test_medians_are_given_in_physical_units_and_methods_with_their_preset(tmp_path):
     # slenderness 0.2: tan λ = 0.2 exactly, so PGA/(g tan λ) = 1 is a PGA of 0.2 g
     res = study(block_scenario(1.0), noise_records(2), (1.0, 3.0), engines=["pymunk"],
-                presets=["fast"], settle=1.0)
+                presets=["fast"], settle=1.0, design_level=2.0)
     assert res.in_units(1.0) == f"{0.2 * res.options.scenario.g:.3g} m/s² (0.2 g)"
     pga = dataclasses.replace(res, measure=IntensityMeasure.PGA)
     assert pga.in_units(res.options.scenario.g) == "1 g"
@@ -301,3 +301,7 @@ def test_medians_are_given_in_physical_units_and_methods_with_their_preset(tmp_p
     rows = (tmp_path / "runs.csv").read_text().splitlines()
     assert rows[0].split(",")[:5] == ["record", "level", "scale", "method", "preset"]
     assert {r.preset for r in res.runs} == {"", "fast"}
+    md = (tmp_path / "report.md").read_text()
+    assert "probability at the design level 2 = 3.92 m/s² (0.4 g)" in md
+    with pytest.raises(RockbenchError, match="design level"):
+        study(block_scenario(1.0), noise_records(1), (1.0,), design_level=-1.0)

@@ -67,6 +67,9 @@ def configure_fragility(p: argparse.ArgumentParser) -> None:
                         "PGV p/(g tan λ) (the velocity analogue, after Dimitrakopoulos & "
                         "DeJong 2012), Sa(T, ζ) (m/s², with --period) or the Arias "
                         "intensity (m/s)")
+    p.add_argument("--design-level", type=float, default=None, metavar="A",
+                   help="report each method's probability of exceeding each limit state at "
+                        "this intensity (the measure's units), with its interval")
     p.add_argument("--period", type=float, default=None, metavar="T",
                    help="period of the sa measure (s)")
     p.add_argument("--damping", type=float, default=0.05, metavar="ZETA",
@@ -164,7 +167,7 @@ def execute_fragility(args: argparse.Namespace) -> int:
         oscillator = Oscillator(args.period, args.damping)
     opts = FragilityOptions(
         scenario=scenario, records=records, levels=levels, measure=args.measure,
-        oscillator=oscillator,
+        oscillator=oscillator, design_level=args.design_level,
         engines=engines, presets=[preset], overrides=overrides, theta_limit=args.theta_limit,
         settle=args.settle, output_rate=args.output_rate,
         execution=execution_options(args, isolate=not args.no_isolate), resume=args.resume,
@@ -188,6 +191,10 @@ def execute_fragility(args: argparse.Namespace) -> int:
                 phys = result.in_units(fit.median)
                 text = (f"median {fit.median:.3g}{f' = {phys}' if phys else ''} "
                         f"[{lo:.3g}, {hi:.3g}], dispersion {fit.dispersion:.3g}")
+                if args.design_level is not None:
+                    at = boot.probability_at(args.design_level)
+                    text += (f"; P at {at.level:g}: {at.probability:.3f} "
+                             f"[{at.interval[0]:.3f}, {at.interval[1]:.3f}]")
             else:
                 text = fit.status.value
             print(f"{c.method:>18} {c.state.value:<12} {text}")

@@ -33,7 +33,7 @@ estimates in logistic regression models, Biometrika 71(1), 1–10 (separation).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any
 
@@ -43,7 +43,7 @@ from scipy import special
 from rockbench.errors import RockbenchError
 
 __all__ = ["ExceedanceData", "FitStatus", "FragilityFit", "FragilityBootstrap",
-           "FragilityError", "fit_fragility", "bootstrap_fragility"]
+           "LevelProbability", "FragilityError", "fit_fragility", "bootstrap_fragility"]
 
 
 class FragilityError(RockbenchError, ValueError):
@@ -245,6 +245,8 @@ class FragilityBootstrap:
         means they understate the uncertainty.
     seed : int
         Seed of the random generator.
+    resampled : tuple of ndarray
+        θ and β of the resamples with a finite fit (empty when nothing was resampled).
     """
 
     fit: FragilityFit
@@ -254,11 +256,48 @@ class FragilityBootstrap:
     n_resamples: int
     n_degenerate: int
     seed: int
+    resampled: tuple[np.ndarray, np.ndarray] = field(
+        default=(np.empty(0), np.empty(0)), repr=False, compare=False)
 
     @property
     def degenerate_fraction(self) -> float:
         """n_degenerate / n_resamples (0 when nothing was resampled)."""
         return self.n_degenerate / self.n_resamples if self.n_resamples else 0.0
+
+    def probability_at(self, level: float) -> LevelProbability:
+        """P(exceeded | IM = ``level``) = Φ(ln(level/θ)/β), with its percentile interval.
+
+        The interval is that of the same probability over the resamples with a finite
+        fit; everything is NaN when the fit itself is not ``OK``.
+        """
+        level = float(level)
+        if not (math.isfinite(level) and level > 0.0):
+            raise FragilityError(f"the design level must be a finite number > 0, got {level!r}")
+        if not self.fit.ok:
+            return LevelProbability(level, math.nan, (math.nan, math.nan))
+        p = float(special.ndtr(math.log(level / self.fit.median) / self.fit.dispersion))
+        theta, beta = self.resampled
+        ps = special.ndtr(np.log(level / theta) / beta)
+        return LevelProbability(level, p, percentile_interval(ps, self.confidence))
+
+
+@dataclass(frozen=True)
+class LevelProbability:
+    """The probability of exceeding a limit state at one intensity level.
+
+    Attributes
+    ----------
+    level : float
+        The intensity level (the study's measure and units).
+    probability : float
+        Φ(ln(level/θ)/β) of the fit.
+    interval : tuple of float
+        Its bootstrap percentile interval.
+    """
+
+    level: float
+    probability: float
+    interval: tuple[float, float]
 
 
 def _centre(levels: np.ndarray) -> tuple[np.ndarray, float]:
@@ -470,7 +509,8 @@ def bootstrap_fragility(data: ExceedanceData, n_resamples: int = 1000,
     good = np.isfinite(theta)
     return FragilityBootstrap(fit, confidence, percentile_interval(theta[good], confidence),
                               percentile_interval(beta[good], confidence), int(n_resamples),
-                              int(n_resamples) - int(good.sum()), seed)
+                              int(n_resamples) - int(good.sum()), seed,
+                              (theta[good], beta[good]))
 
 
 def refit(levels: np.ndarray, runs: np.ndarray, exceeded: np.ndarray,

@@ -171,6 +171,31 @@ def _fit_table(result: FragilityResult, state: LimitState, number: int) -> Table
     return t
 
 
+def _design_table(result: FragilityResult, state: LimitState, number: int,
+                  level: float) -> Table:
+    opts = result.options
+    conf = f"{100 * opts.confidence:g} %"
+    phys = result.in_units(level)
+    t = Table(
+        key=f"design-{state.value}",
+        title=f"Table {number}. {state.label(opts.theta_limit)}: probability at the design "
+              f"level {level:g}{f' = {phys}' if phys else ''}",
+        caption=(f"P(exceeded | {result.measure.label} = {level:g}) = Φ(ln(level/θ)/β) of "
+                 f"each method's fit, with its {conf} bootstrap interval (the same probability "
+                 "over the resamples); no value where the fit is degenerate."),
+        columns=["method", "P", f"P {conf}"])
+    for meth in result.methods:
+        boot = result.curve(meth.label, state).bootstrap
+        kind = "ref" if meth.is_reference else ""
+        if boot is None or not boot.fit.ok:
+            t.add_row([Cell(meth.label, kind="head"), "–", "–"])
+            continue
+        at = boot.probability_at(level)
+        t.add_row([Cell(meth.label, kind="head"), Cell(f"{at.probability:.3f}", kind),
+                   Cell(_interval(at.interval, "{:.3f}"), kind)])
+    return t
+
+
 def _fractions_table(result: FragilityResult, state: LimitState, number: int) -> Table:
     opts = result.options
     t = Table(key=f"fractions-{state.value}",
@@ -285,6 +310,9 @@ def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = Tr
         sec.items.append(_fit_table(result, state, number))
         number += 1
         sec.items.append(_fractions_table(result, state, number))
+        if opts.design_level is not None:
+            number += 1
+            sec.items.append(_design_table(result, state, number, opts.design_level))
         sec.paragraphs.append(_islands_paragraph(
             [c for c in result.curves if c.state is state], opts.theta_limit))
         sections.append(sec)

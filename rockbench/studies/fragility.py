@@ -221,6 +221,9 @@ class FragilityOptions:
         The intensity measure of the levels.
     oscillator : Oscillator or None
         The period and damping of the ``sa`` measure.
+    design_level : float or None
+        A level (the measure's units) at which each fit's probability of exceedance is
+        reported with its interval.
     engines : list of str
         Engines to run besides the analytic reference (always run).
     presets : list of str
@@ -252,6 +255,7 @@ class FragilityOptions:
     levels: Sequence[float]
     measure: IntensityMeasure | str = IntensityMeasure.PGA_UPLIFT
     oscillator: Oscillator | None = None
+    design_level: float | None = None
     engines: list[str] = field(default_factory=list)
     presets: list[str] = field(default_factory=lambda: ["accurate"])
     overrides: dict[str, dict[str, Any]] = field(default_factory=dict)
@@ -523,6 +527,10 @@ def _plan(opts: FragilityOptions, m: IntensityMeasure) -> tuple[tuple[Method, ..
     if not (math.isfinite(opts.theta_limit) and opts.theta_limit > 0):
         raise RockbenchError(f"theta_limit must be > 0 (a fraction of λ), got "
                              f"{opts.theta_limit!r}")
+    if opts.design_level is not None and not (math.isfinite(opts.design_level)
+                                              and opts.design_level > 0):
+        raise RockbenchError(f"the design level must be a finite number > 0, got "
+                             f"{opts.design_level!r}")
     if m is IntensityMeasure.SA and opts.oscillator is None:
         raise RockbenchError("the sa measure needs the oscillator's period (--period)")
     _warn_below_uplift(opts.levels, m, rocking, base.g)
