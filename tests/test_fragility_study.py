@@ -305,3 +305,11 @@ def test_medians_are_given_in_physical_units_and_methods_with_their_preset(tmp_p
     assert "probability at the design level 2 = 3.92 m/s² (0.4 g)" in md
     with pytest.raises(RockbenchError, match="design level"):
         study(block_scenario(1.0), noise_records(1), (1.0,), design_level=-1.0)
+
+
+def test_the_report_draws_one_ida_curve_per_record_and_method(tmp_path):
+    res = study(block_scenario(1.0), noise_records(3), (1.0, 3.0, 6.0), settle=1.0)
+    write_report(res, tmp_path)
+    png = tmp_path / "figures" / "ida.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
+    assert "figures/ida.png" in (tmp_path / "report.md").read_text()

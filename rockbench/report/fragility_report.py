@@ -44,11 +44,12 @@ from rockbench.store import jsonable
 from rockbench.studies.fragility import (
     FragilityOptions,
     FragilityResult,
+    FragilityRun,
     LimitState,
     LimitStateCurve,
 )
 
-__all__ = ["write_report", "fragility_figure", "CITATION"]
+__all__ = ["write_report", "fragility_figure", "ida_figure", "CITATION"]
 
 #: The method of the fits.
 CITATION = ("J. W. Baker, \u201cEfficient analytical fragility function fitting using dynamic "
@@ -126,6 +127,60 @@ def fragility_figure(path: Path, result: FragilityResult, state: LimitState) -> 
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=_DPI)
     return path
+
+
+def ida_figure(path: Path, result: FragilityResult) -> Path:
+    """Incremental dynamic analysis curves: peak |θ|/λ against intensity, one line per record.
+
+    One panel per method (the analytic reference first); a run that overturned is drawn
+    at |θ|/λ = 1 with a triangle, one without an outcome is left out (a peak above 1 with
+    no overturning is a block the ground pushed back).
+    """
+    methods = result.methods
+    cols = min(3, len(methods))
+    rows = -(-len(methods) // cols)
+    fig = Figure(figsize=(3.6 * cols, 3.0 * rows + 0.4))
+    FigureCanvasAgg(fig)
+    names = [r.name for r in result.records]
+    colors = [f"C{i % 10}" for i in range(len(names))]
+    first = None
+    for k, meth in enumerate(methods):
+        ax = fig.add_subplot(rows, cols, k + 1, sharex=first, sharey=first)
+        first = first or ax
+        for rec, color in zip(names, colors, strict=True):
+            runs = sorted((r for r in result.runs if r.method == meth.label and r.record == rec),
+                          key=lambda r: r.level)
+            pts = [(r.level, 1.0 if r.overturned else _peak(r)) for r in runs
+                   if r.overturned is not None and (r.overturned or _peak(r) is not None)]
+            if not pts:
+                continue
+            x, y = zip(*pts, strict=True)
+            ax.plot(x, y, color=color, linewidth=1.0, alpha=0.8, label=rec)
+            over = [(r.level, 1.0) for r in runs if r.overturned]
+            if over:
+                ax.plot(*zip(*over, strict=True), linestyle="none", marker="^", color=color,
+                        markersize=5)
+        ax.axhline(1.0, color="0.5", linewidth=0.6, linestyle=":")
+        ax.set_title(meth.label, fontsize=9)
+        ax.set_ylim(bottom=0.0)
+        ax.grid(True, alpha=0.3)
+        if k % cols == 0:
+            ax.set_ylabel("peak |θ| / λ")
+        if k >= len(methods) - cols:
+            ax.set_xlabel(result.measure.label, fontsize=8)
+    handles, labels = first.get_legend_handles_labels() if first is not None else ([], [])
+    if handles:
+        fig.legend(handles, labels, fontsize=7, loc="lower center",
+                   ncol=min(4, len(labels)), frameon=False)
+    fig.tight_layout(rect=(0.0, 0.06 + 0.02 * (len(labels) // 4), 1.0, 1.0))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=_DPI)
+    return path
+
+
+def _peak(run: FragilityRun) -> float | None:
+    """The largest peak |θ|/λ over the blocks of a run (None without one)."""
+    return max((p for p in run.metrics.peaks if p is not None), default=None)
 
 
 def _fit_table(result: FragilityResult, state: LimitState, number: int) -> Table:
@@ -257,7 +312,7 @@ def _write_runs(result: FragilityResult, out: Path) -> list[Path]:
                      "method": r.method, "preset": r.preset, "status": m.status.value,
                      "overturned": r.overturned,
                      "rocking_exceeded": r.rocking,
-                     "peak": max((p for p in m.peaks if p is not None), default=None),
+                     "peak": _peak(r),
                      "wall_time": m.wall_time, "cpu_time": m.cpu_time,
                      "reused": r.reused, "message": m.message})
     csv_path = out / "runs.csv"
@@ -316,6 +371,12 @@ def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = Tr
         sec.paragraphs.append(_islands_paragraph(
             [c for c in result.curves if c.state is state], opts.theta_limit))
         sections.append(sec)
+    isec = Section("ida", "Incremental dynamic analysis curves")
+    path = ida_figure(out / "figures" / "ida.png", result)
+    isec.items.append(FigureItem(str(path.relative_to(out)), (
+        "Peak |θ|/λ of each record against intensity, one panel per method; a triangle at 1: "
+        "the run overturned."), "IDA curves"))
+    sections.append(isec)
     number += 1
     rsec = Section("records", "Records")
     rsec.items.append(_records_table(result, number))
