@@ -137,6 +137,13 @@ def test_plan_of_pymunk_halves_its_step() -> None:
                        max_timestep=max_timestep(calibration_cases("free")))
     assert _rungs(fast, "timestep") == [(1, 5e-4)]
     assert any("longer than the cases' output interval" in s.reason for s in fast.skipped)
+    # the step a frame rate and sub-steps give too: Bullet's fast preset (1000 fps, no
+    # sub-steps) at 500 fps steps 2 ms, which the engine would refuse on 1 kHz output
+    bullet = plan_search("bullet", preset="fast", levels=1,
+                         max_timestep=max_timestep(calibration_cases("free")))
+    assert _rungs(bullet, "fps") == [(1, 2000.0)]
+    assert [s.reason for s in bullet.skipped if s.knob == "fps"] == [
+        "500 gives a physics step of 0.002 s, longer than the cases' output interval 0.001 s"]
 
 
 @pytest.mark.parametrize("kwargs, words", [
