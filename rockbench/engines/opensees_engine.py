@@ -550,15 +550,7 @@ class OpenseesEngine(Engine):
             settled = self._settle(ops)
         else:
             self._set_initial_state(ops, scenario, block_nodes, ifaces)
-        self._add_excitation(ops, scenario, dt, 2)
-        ops.constraints("Plain")
-        ops.numberer("RCM")
-        ops.system("BandGeneral")
-        self._start_transient(ops, s, scenario, cnodes)
-        # a scene that does not stand on its springs has no initial state: the poses read
-        # NaN, which the base class's watchdog reports as unstable
-        self._failed = not settled
-        return dt
+        return self._finish_build(ops, s, scenario, cnodes, dt, settled)
 
     def unmodelled_pairs(self, scenario: Scenario) -> tuple[tuple[int, int], ...]:
         """Every pair of a block and another body that shares no joint at rest: the
@@ -686,6 +678,11 @@ class OpenseesEngine(Engine):
                            0.0, 0.0)
         self._test = ("NormDispIncr", float(s.tolerance) * g / omega**2, int(s.iterations))
         settled = self._settle(ops)
+        return self._finish_build(ops, s, scenario, cnodes, dt, settled)
+
+    def _finish_build(self, ops: Any, s: OpenseesSettings, scenario: Scenario,
+                      cnodes: list[int], dt: float, settled: bool) -> float:
+        """The excitation, the analysis and the transient's start, common to both models."""
         self._add_excitation(ops, scenario, dt, 2)
         ops.constraints("Plain")
         ops.numberer("RCM")

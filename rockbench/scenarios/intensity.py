@@ -171,6 +171,14 @@ def _axial(excitation: Excitation, measure: str) -> Motion:
     return excitation
 
 
+def _record(excitation: Excitation, measure: str) -> Record:
+    """The excitation as a record; the measures computed from samples refuse the others."""
+    if not isinstance(excitation, Record):
+        raise ScenarioError(f"{measure} is computed for records, not for a "
+                            f"{excitation.kind!r} excitation")
+    return excitation
+
+
 def _velocity_scale(rocking: RockingProperties, g: float) -> float:
     return g * math.tan(rocking.lam) / rocking.p
 
@@ -188,10 +196,8 @@ def spectral_acceleration(excitation: Excitation, oscillator: Oscillator) -> flo
     ScenarioError
         For an excitation that is not a record.
     """
-    if not isinstance(excitation, Record):
-        raise ScenarioError(f"Sa(T) is computed for records, not for a {excitation.kind!r} "
-                            f"excitation")
-    r = response(excitation, oscillator, samples_per_period=SPECTRAL_SAMPLES)
+    r = response(_record(excitation, "Sa(T)"), oscillator,
+                 samples_per_period=SPECTRAL_SAMPLES)
     return oscillator.omega ** 2 * float(np.max(np.abs(r.q)))
 
 
@@ -203,11 +209,9 @@ def arias_intensity(excitation: Excitation, g: float = STANDARD_GRAVITY) -> floa
     ScenarioError
         For an excitation that is not a record.
     """
-    if not isinstance(excitation, Record):
-        raise ScenarioError(f"the Arias intensity is computed for records, not for a "
-                            f"{excitation.kind!r} excitation")
-    t = np.asarray(excitation.times, float)
-    a = np.asarray(excitation.acceleration(t), float)
+    record = _record(excitation, "the Arias intensity")
+    t = np.asarray(record.times, float)
+    a = np.asarray(record.acceleration(t), float)
     # ∫ over a step of (linear a)² = h (a_k² + a_k a_{k+1} + a_{k+1}²) / 3
     integral = float(np.sum(np.diff(t) * (a[:-1] ** 2 + a[:-1] * a[1:] + a[1:] ** 2)) / 3.0)
     return math.pi / (2.0 * g) * integral
