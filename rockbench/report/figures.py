@@ -27,7 +27,7 @@ from matplotlib.ticker import NullFormatter
 
 from rockbench.analytic import critical_angle, uplift_ratio
 from rockbench.evaluation import RunResult
-from rockbench.method import REFERENCE, Method
+from rockbench.method import CONSENSUS, REFERENCE, Method
 from rockbench.scenarios import Scenario
 from rockbench.studies.pareto import pareto_front
 from rockbench.trajectory import Status, Trajectory
@@ -54,7 +54,8 @@ class MethodStyle:
 
 
 def method_styles(methods: Sequence[Method]) -> dict[str, MethodStyle]:
-    """A colour per engine, a dash and a marker per preset; the analytic reference in black.
+    """A colour per engine, a dash and a marker per preset; the reference (analytic or
+    consensus) in black.
 
     Keyed by method label.
     """
@@ -68,13 +69,13 @@ def method_styles(methods: Sequence[Method]) -> dict[str, MethodStyle]:
     markers = "o^sDv"
     ci = 0
     for eng in engines:
-        if eng == REFERENCE:
+        if eng in (REFERENCE, CONSENSUS):
             color = "#000000"
         else:
             color = _COLORS[ci % len(_COLORS)]
             ci += 1
         for k, label in enumerate(presets[eng]):
-            ref = eng == REFERENCE
+            ref = eng in (REFERENCE, CONSENSUS)
             out[label] = MethodStyle(color=color, linestyle=_DASHES[k % len(_DASHES)],
                                      linewidth=2.2 if ref else 1.3,
                                      marker="o" if ref else markers[k % len(markers)],

@@ -2,10 +2,11 @@
 
 :func:`write_report` renders a :class:`~rockbench.studies.fragility.FragilityResult`
 (nothing is computed here but the curves drawn from the fits): per limit state
-a figure of every method's lognormal fragility over the analytic one with the
-observed fractions as points, and a table of median, dispersion, their
-bootstrap intervals, the median's ratio to the analytic one with its paired
-interval, and the cost (runs, CPU time) side by side; the safe islands found
+a figure of every method's lognormal fragility over the reference's (analytic, or
+the engines' consensus) with the observed fractions as points, and a table of
+median, dispersion, their bootstrap intervals, the median's ratio to the
+reference's with its paired interval, how often each method's outcome is the
+reference's, and the cost (runs, CPU time) side by side; the safe islands found
 (as they are, not smoothed); the records with their provenance; and
 ``runs.csv`` / ``runs.json`` with every run's result. ``report.md`` and
 ``index.html`` hold the same tables (:mod:`rockbench.report.document`).
@@ -28,7 +29,7 @@ from scipy.stats import norm
 from rockbench import provenance
 from rockbench.analytic import critical_angle
 from rockbench.fragility import FitStatus, FragilityFit
-from rockbench.method import REFERENCE
+from rockbench.method import CONSENSUS
 from rockbench.report.document import (
     Document,
     FigureItem,
@@ -82,7 +83,8 @@ def _fit_text(fit: FragilityFit) -> str:
 
 
 def fragility_figure(path: Path, result: FragilityResult, state: LimitState) -> Path:
-    """P(exceed) against intensity: each method's fit (analytic in black) and its fractions.
+    """P(exceed) against intensity: each method's fit (the reference in black) and its
+    fractions.
 
     A method without a finite fit shows its fractions only (its legend entry says why).
     """
@@ -132,11 +134,12 @@ def fragility_figure(path: Path, result: FragilityResult, state: LimitState) -> 
 def ida_figure(path: Path, result: FragilityResult) -> Path:
     """Incremental dynamic analysis curves: peak |θ|/λ against intensity, one line per record.
 
-    One panel per method (the analytic reference first); a run that overturned is drawn
-    at |θ|/λ = 1 with a triangle, one without an outcome is left out (a peak above 1 with
-    no overturning is a block the ground pushed back).
+    One panel per method that ran (the analytic reference first; a consensus has no runs
+    of its own); a run that overturned is drawn at |θ|/λ = 1 with a triangle, one without
+    an outcome is left out (a peak above 1 with no overturning is a block the ground
+    pushed back).
     """
-    methods = result.methods
+    methods = [m for m in result.methods if m.engine != CONSENSUS]
     cols = min(3, len(methods))
     rows = -(-len(methods) // cols)
     fig = Figure(figsize=(3.6 * cols, 3.0 * rows + 0.4))
@@ -186,17 +189,21 @@ def _peak(run: FragilityRun) -> float | None:
 def _fit_table(result: FragilityResult, state: LimitState, number: int) -> Table:
     opts = result.options
     conf = f"{100 * opts.confidence:g} %"
+    ref = result.reference.label
     t = Table(
         key=f"fit-{state.value}", title=f"Table {number}. {state.label(opts.theta_limit)}: "
                                         "lognormal fragility per method",
         caption=(f"Maximum-likelihood median θ (in {result.measure.label}) and dispersion β "
                  f"(Baker 2015) over the levels with runs, with {conf} bootstrap intervals "
                  f"({opts.n_resamples} resamples of the runs within each level); the ratio "
-                 f"θ/θ_analytic with its {conf} paired bootstrap interval (the records "
-                 "resampled jointly for both methods); the cost of the method over the whole "
-                 "study. 'extrapolated': the median lies outside the tested levels."),
+                 f"θ/θ_{ref} with its {conf} paired bootstrap interval (the records "
+                 "resampled jointly for both methods); the runs whose outcome is the "
+                 f"{ref} reference's, of those where both have one; the cost of the method "
+                 "over the whole study. 'extrapolated': the median lies outside the tested "
+                 "levels."),
         columns=["method", "θ", "θ in units", f"θ {conf}", "β", f"β {conf}",
-                 "θ / θ_analytic", f"ratio {conf}", "runs", "no outcome", "CPU time (s)"])
+                 f"θ / θ_{ref}", f"ratio {conf}", f"agrees with {ref}", "runs",
+                 "no outcome", "CPU time (s)"])
     costs = {c.method: c for c in result.costs}
     for meth in result.methods:
         c = result.curve(meth.label, state)
@@ -220,8 +227,13 @@ def _fit_table(result: FragilityResult, state: LimitState, number: int) -> Table
             else:
                 cells += ["–", "–"]
         else:
-            cells += [Cell(_fit_text(boot.fit), kind), "–", "–", "–", "–", "–", "–"]
-        cells += [str(cost.runs), str(cost.failed), f"{cost.cpu_time:.2f}"]
+            cells += [Cell(_fit_text(boot.fit), kind)] + ["–"] * 6
+        cells.append(Cell("–", kind) if meth.is_reference else
+                     f"{c.agreed}/{c.compared}" if c.compared else "–")
+        if meth.engine == CONSENSUS:  # not a method that runs: it has no runs of its own
+            cells += [Cell("–", kind)] * 3
+        else:
+            cells += [str(cost.runs), str(cost.failed), f"{cost.cpu_time:.2f}"]
         t.add_row(cells)
     return t
 
@@ -347,6 +359,7 @@ def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = Tr
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     opts = result.options
+    ref = result.reference.label
     files = _write_runs(result, out)
     number = 0
     sections = []
@@ -358,9 +371,9 @@ def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = Tr
             "(an overturned run counts as exceeding).")
         path = fragility_figure(out / "figures" / f"fragility-{state.value}.png", result, state)
         sec.items.append(FigureItem(str(path.relative_to(out)), (
-            "Fraction of records exceeding against intensity (markers; analytic reference "
-            "hollow black, methods side by side at each level) and each method's lognormal "
-            "fit (curves; analytic in black)."), f"Fragility curves: {state.value}"))
+            f"Fraction of records exceeding against intensity (markers; the {ref} reference "
+            f"hollow black, methods side by side at each level) and each method's lognormal "
+            f"fit (curves; {ref} in black)."), f"Fragility curves: {state.value}"))
         number += 1
         sec.items.append(_fit_table(result, state, number))
         number += 1
@@ -409,15 +422,23 @@ def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = Tr
         ("Engine versions", ", ".join(f"{e} {v}" for e, v in result.versions.items())),
         ("Command", opts.command or "(Python API)"),
     ]
-    ref = REFERENCE
     doc = Document(
         title=f"rockbench fragility report — {opts.scenario.name}",
         header=header,
-        intro=[f"Incremental dynamic analysis: every record scaled to every intensity level, "
-               f"run on every method, the {ref} reference (Housner's equation; the two-block "
-               "model for stacks) among them. Fragilities are lognormal, fitted by maximum "
-               "likelihood (Baker 2015) with bootstrap intervals; each engine's median is "
-               "compared with the analytic one by a paired bootstrap over the records."],
+        intro=[("Incremental dynamic analysis: every record scaled to every intensity level, "
+                "run on every method, the analytic reference (Housner's equation; the "
+                "two-block model for stacks) among them."
+                if ref != CONSENSUS else
+                "Incremental dynamic analysis: every record scaled to every intensity level, "
+                "run on every engine. No closed form covers this structure: the reference is "
+                "the consensus of the engines' contact-model families, run by run (each "
+                "family's majority outcome; the outcome at least two families give, and more "
+                "families than the other; no consensus otherwise). It is only as good as the "
+                "engines at these presets: check them first with `rockbench verify` on the "
+                "structure.")
+               + " Fragilities are lognormal, fitted by maximum likelihood (Baker 2015) with "
+               f"bootstrap intervals; each engine's median is compared with the {ref} one by "
+               "a paired bootstrap over the records."],
         sections=sections, citation=CITATION)
     index, md = write_document(doc, out, embed=embed_figures,
                                data=("runs.csv", "runs.json"))

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 import statistics
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import partial
 
@@ -33,7 +33,7 @@ from rockbench.evaluation import PEAK_FLOOR
 from rockbench.studies.convergence import Convergence, ConvergenceTolerances, Estimate
 from rockbench.trajectory import Status
 
-__all__ = ["Consensus", "consensus", "MIN_FAMILIES"]
+__all__ = ["Consensus", "consensus", "outcome_consensus", "contact_family", "MIN_FAMILIES"]
 
 #: Independent contact-model families a consensus needs.
 MIN_FAMILIES = 2
@@ -81,8 +81,13 @@ class Consensus:
         return len({f for _, f in self.members})
 
 
+def contact_family(engine: str) -> str:
+    """The contact-model family of a registered engine (its name when it declares none)."""
+    return engine_class(engine).contact_model or engine
+
+
 def _family(c: Convergence) -> str:
-    return engine_class(c.method.engine).contact_model or c.method.engine
+    return contact_family(c.method.engine)
 
 
 def _peak(i: int, c: Convergence) -> Estimate | None:
@@ -182,3 +187,28 @@ def consensus(ladders: Sequence[Convergence],
     over = agreed(lambda c: c.overturn_time) if outcome is Status.OVERTURNED else None
     return Consensus(name, True, outcome, tuple(p for p in peaks if p is not None), over,
                      members, tuple(outliers))
+
+
+def outcome_consensus(by_family: Mapping[str, Sequence[bool | None]]) -> bool | None:
+    """The consensus of a yes/no outcome (e.g. overturned) over contact-model families.
+
+    Step 1 of :func:`consensus` for one run's outcome: each family's outcome is the
+    majority of its methods' (None: a tie, or none of its methods has an outcome); the
+    consensus is the outcome that most families give, when at least
+    :data:`MIN_FAMILIES` of them give it; otherwise None (no consensus).
+
+    Parameters
+    ----------
+    by_family : mapping of str to sequence of bool or None
+        Per family, its methods' outcomes (None: the run has no outcome).
+    """
+    votes = []
+    for outcomes in by_family.values():
+        known = [o for o in outcomes if o is not None]
+        yes = sum(known)
+        if known and 2 * yes != len(known):
+            votes.append(2 * yes > len(known))
+    yes, no = sum(votes), len(votes) - sum(votes)
+    if max(yes, no) < MIN_FAMILIES or yes == no:
+        return None
+    return yes > no

@@ -1,9 +1,11 @@
 """Overturning fragility: incremental dynamic analysis of one scenario over a record set.
 
-Every record of a set is scaled to every intensity level of one measure
-(:mod:`rockbench.scenarios.intensity`: PGA, PGV, PGA/(g tan λ) or
-PGV p/(g tan λ)) and run on every method (each engine at each preset, and the
-analytic reference) through the campaign (:func:`rockbench.campaign.run_campaign`:
+The scenario is any structure: a block, a stack, or an assembly (a parapet on its wall,
+a column of drums, an arch). Every record of a set is scaled to every intensity level
+of one measure (:mod:`rockbench.scenarios.intensity`: PGA, PGV, Sa(T, ζ), Arias,
+PGA/(g tan λ) or PGV p/(g tan λ)) and run on every method (each engine at each preset,
+and the analytic reference where a closed form covers the structure) through the
+campaign (:func:`rockbench.campaign.run_campaign`:
 isolated, parallel, Dask-capable jobs). Each run lasts the record plus a settling
 tail and is recorded in the results store as it finishes (kind ``fragility``,
 the record's provenance as its ``suite``); ``resume`` reuses the stored runs.
@@ -14,10 +16,18 @@ Two limit states are predicates on each run's
 (an overturned run exceeds it too). A run that did not complete (crashed,
 unstable, timed out) has no outcome: it is left out of its level's count.
 
+The reference is the analytic model (Housner's equation, the two-block model) where it
+covers the structure; otherwise it is the consensus of the engines' contact-model
+families, run by run (:func:`rockbench.studies.consensus.outcome_consensus`): each
+family's majority outcome, and the outcome that at least two families, and more families
+than the other, give. PGA/(g tan λ) takes λ where the structure first
+moves (:func:`uplift_acceleration`): for an assembly atan(α0) of limit analysis.
+
 For each method and limit state the study gives the fraction exceeded per
 level, the maximum-likelihood lognormal fit with bootstrap intervals
 (:func:`rockbench.fragility.bootstrap_fragility`, Baker 2015), the median's
-ratio to the analytic one with a paired bootstrap interval
+ratio to the reference's with a paired bootstrap interval, how often its outcome is the
+reference's
 (:func:`rockbench.fragility.compare_medians`), and the levels where the
 fraction, or a single record's outcome, falls as the intensity grows (safe
 islands, :func:`rockbench.fragility.find_non_monotone`): reported as they are,
@@ -46,6 +56,7 @@ from typing import Any
 
 import numpy as np
 
+from rockbench.analytic import coverage, critical_angle
 from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
 from rockbench.errors import PlausibilityWarning, RockbenchError
 from rockbench.evaluation import RunMetrics
@@ -61,17 +72,20 @@ from rockbench.fragility import (
     scale_factor,
 )
 from rockbench.geometry import RockingProperties
-from rockbench.method import REFERENCE, Method
+from rockbench.method import CONSENSUS, Method
 from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario
 from rockbench.scenarios.excitation import Record
 from rockbench.scenarios.floor import BuildingMode, floor_record
 from rockbench.scenarios.oscillator import Oscillator
+from rockbench.scenarios.shear_building import ShearBuilding, shear_floor_record
+from rockbench.studies.consensus import MIN_FAMILIES, contact_family, outcome_consensus
 from rockbench.trajectory import Status
 
 __all__ = ["KIND", "LimitState", "StudyRecord", "FragilityOptions", "FragilityRun",
            "LimitStateCurve", "MethodCost", "RecordIsland", "FragilityResult", "set_records",
-           "floor_records", "parse_levels", "run_fragility", "study_rocking", "DEFAULT_SETTLE"]
+           "floor_records", "parse_levels", "run_fragility", "study_rocking",
+           "uplift_acceleration", "DEFAULT_SETTLE"]
 
 #: The store's ``kind`` of runs made by this study.
 KIND = "fragility"
@@ -148,12 +162,28 @@ def set_records(set_name: str, names: Sequence[str] | None = None) -> tuple[Stud
                              i.station) for i in infos)
 
 
-def floor_records(records: Sequence[StudyRecord], mode: BuildingMode
-                  ) -> tuple[StudyRecord, ...]:
-    """The records as the floor of ``mode`` feels them (:mod:`rockbench.scenarios.floor`).
+def floor_records(records: Sequence[StudyRecord], mode: BuildingMode | ShearBuilding, *,
+                  storey: int | None = None) -> tuple[StudyRecord, ...]:
+    """The records as a floor of the building feels them.
 
-    The study then scales the floor motions: a ``pga`` level is a peak floor acceleration.
+    ``mode`` is one linear building mode (:mod:`rockbench.scenarios.floor`) or a
+    multi-storey shear building (:mod:`rockbench.scenarios.shear_building`), whose
+    ``storey`` (default: the roof) the part stands on. The study then scales the floor
+    motions: a ``pga`` level is a peak floor acceleration.
+
+    Raises
+    ------
+    RockbenchError
+        A storey given with a :class:`BuildingMode`; a ``ScenarioError`` for a storey the
+        shear building does not have.
     """
+    if isinstance(mode, ShearBuilding):
+        k = mode.storeys if storey is None else storey
+        tag = mode.describe(k, mode.default_modes)
+        return tuple(dataclasses.replace(r, record=shear_floor_record(r.record, mode, k),
+                                         provenance=f"{r.provenance}; {tag}") for r in records)
+    if storey is not None:
+        raise RockbenchError("a storey is a floor of a ShearBuilding, not of a BuildingMode")
     tag = f"floor of T = {mode.period:g} s, ζ = {mode.damping:g}, Γφ = {mode.amplification:g}"
     return tuple(dataclasses.replace(r, record=floor_record(r.record, mode),
                                      provenance=f"{r.provenance}; {tag}") for r in records)
@@ -194,14 +224,35 @@ def _check_levels(levels: Sequence[float]) -> None:
 
 def study_rocking(scenario: Scenario) -> RockingProperties:
     """The rocking constants the normalised measures use: the block's, or for a stack
-    those of the whole stack rocking as one body (:meth:`Column.monolithic`)."""
+    those of the whole stack rocking as one body (:meth:`Column.monolithic`).
+
+    Raises
+    ------
+    RockbenchError
+        For an assembly (a parapet on its wall, an arch) or an offset stack: it has no
+        single rocking body.
+    """
     col = scenario.geometry.column
-    if col is None:
-        raise RockbenchError("the fragility study takes a single block or a stack, "
-                             "not an assembly")
+    if col is None or not col.centred:
+        raise RockbenchError(
+            f"{scenario.name} is an assembly, which has no single rocking body (no p): the "
+            f"measure pgv-rocking needs a block or a centred stack; use pga, pgv, sa, arias "
+            f"or pga-uplift (normalised by the collapse factor α0 of limit analysis)")
     if len(col) == 1:
         return col.blocks[0].rocking(scenario.g)
     return col.monolithic(scenario.g)
+
+
+def uplift_acceleration(scenario: Scenario) -> float:
+    """g tan λ (m/s²), what ``pga-uplift`` divides the PGA by: the least base acceleration
+    that sets any part of the structure in motion.
+
+    λ is :func:`rockbench.analytic.critical_angle`: the block's own; for a centred stack
+    the smallest of each block's, each joint's and the whole stack's; for any other
+    structure (a parapet on its wall, an arch) atan(α0), α0 the smaller collapse factor
+    of limit analysis in the two directions. For one block all are tan λ = b/h.
+    """
+    return scenario.g * math.tan(critical_angle(scenario.geometry))
 
 
 @dataclass
@@ -225,7 +276,8 @@ class FragilityOptions:
         A level (the measure's units) at which each fit's probability of exceedance is
         reported with its interval.
     engines : list of str
-        Engines to run besides the analytic reference (always run).
+        Engines to run besides the analytic reference (run wherever it covers the
+        structure).
     presets : list of str
         Each engine runs once per preset (label ``engine[preset]`` when several).
     overrides : dict
@@ -336,12 +388,15 @@ class LimitStateCurve:
     bootstrap : FragilityBootstrap or None
         Fit and intervals over the positive levels with runs (None without any).
     comparison : MedianComparison or None
-        Median ratio to the analytic reference (None for the reference itself,
+        Median ratio to the study's reference (None for the reference itself,
         or without reference outcomes).
     islands : tuple of Island
         Levels where the fraction exceeded falls below one reached lower.
     record_islands : tuple of RecordIsland
         Records whose outcome falls from 1 back to 0 as the level grows.
+    agreed, compared : int
+        Runs (record × level) whose outcome equals the reference's, of those where both
+        have one (0, 0 for the reference itself).
     """
 
     method: str
@@ -353,6 +408,8 @@ class LimitStateCurve:
     comparison: MedianComparison | None
     islands: tuple[Island, ...]
     record_islands: tuple[RecordIsland, ...]
+    agreed: int = 0
+    compared: int = 0
 
     @property
     def fractions(self) -> tuple[float, ...]:
@@ -405,7 +462,9 @@ class FragilityResult:
     measure : IntensityMeasure
         The intensity measure.
     methods : tuple of Method
-        The reference first, then the engines.
+        The reference first (the analytic one, or for a structure no closed form covers
+        the consensus of the engines: :meth:`Method.consensus`, not run itself), then the
+        engines.
     records : tuple of StudyRecord
         The records used.
     runs : tuple of FragilityRun
@@ -443,16 +502,22 @@ class FragilityResult:
         """
         if not math.isfinite(value):
             return ""
-        rocking, g = study_rocking(self.options.scenario), self.options.scenario.g
-        uplift = g * math.tan(rocking.lam)
-        m = self.measure
+        scenario, m = self.options.scenario, self.measure
+        g = scenario.g
         if m is IntensityMeasure.PGA_UPLIFT:
+            uplift = uplift_acceleration(scenario)
             return f"{value * uplift:.3g} m/s² ({value * uplift / g:.3g} g)"
         if m is IntensityMeasure.PGV_ROCKING:
-            return f"{value * uplift / rocking.p:.3g} m/s"
+            rocking = study_rocking(scenario)
+            return f"{value * g * math.tan(rocking.lam) / rocking.p:.3g} m/s"
         if m in (IntensityMeasure.PGA, IntensityMeasure.SA):
             return f"{value / g:.3g} g"
         return ""
+
+    @property
+    def reference(self) -> Method:
+        """The study's reference: analytic, or the engines' consensus."""
+        return self.methods[0]
 
     def curve(self, method: str, state: LimitState) -> LimitStateCurve:
         """The curve of one method and limit state."""
@@ -493,30 +558,46 @@ class _Planned:
 
 
 
-def _warn_below_uplift(levels: Sequence[float], m: IntensityMeasure,
-                       rocking: RockingProperties, g: float) -> None:
+def _warn_below_uplift(levels: Sequence[float], m: IntensityMeasure, uplift: float,
+                       g: float) -> None:
     """Warn when every PGA level is below uplift: nothing can exceed, which reads as safe."""
-    uplift = g * math.tan(rocking.lam)
     if m is IntensityMeasure.PGA and max(levels) < uplift:
         warnings.warn(
-            f"every intensity level (at most {max(levels):g} m/s²) is below the block's "
+            f"every intensity level (at most {max(levels):g} m/s²) is below the structure's "
             f"uplift acceleration g tan λ = {uplift:.3g} m/s² ({uplift / g:.3g} g), so no "
             f"level can make it rock: levels are in m/s²; did you mean g?",
             PlausibilityWarning, stacklevel=3)
 
 
-def _methods(opts: FragilityOptions) -> tuple[Method, ...]:
-    engines = list(dict.fromkeys(e for e in opts.engines if e != REFERENCE))
+def _engines(opts: FragilityOptions) -> tuple[Method, ...]:
+    engines = list(dict.fromkeys(e for e in opts.engines
+                                 if not Method(e).is_reference))
     # labels name the preset (pymunk[fast]): a fragility read without it is not reproducible
-    return (Method.reference(),) + tuple(
-        Method.of(e, {"preset": p, **opts.overrides.get(e, {})}, qualified=True)
-        for e in engines for p in opts.presets)
+    return tuple(Method.of(e, {"preset": p, **opts.overrides.get(e, {})}, qualified=True)
+                 for e in engines for p in opts.presets)
+
+
+def _reference(opts: FragilityOptions, engines: Sequence[Method]) -> Method:
+    """The analytic reference where a closed form covers the structure under these records,
+    else the consensus of the engines' contact-model families (which needs two)."""
+    probe = dataclasses.replace(opts.scenario, excitation=opts.records[0].record)
+    why = coverage(probe)
+    if not why:
+        return Method.reference()
+    families = sorted({contact_family(m.engine) for m in engines})
+    if len(families) < MIN_FAMILIES:
+        raise RockbenchError(
+            f"{opts.scenario.name} has {why}: its reference is the consensus of the engines' "
+            f"contact-model families, which needs engines of at least {MIN_FAMILIES} "
+            f"families, got {', '.join(families) or 'none'} (e.g. --engine "
+            f"pymunk,mujoco,dem2d)")
+    return Method.consensus()
 
 
 def _plan(opts: FragilityOptions, m: IntensityMeasure) -> tuple[tuple[Method, ...],
                                                                 list[_Planned]]:
+    """The study's methods (its reference first) and the runs of those that run."""
     base = opts.scenario
-    rocking = study_rocking(base)
     names = [r.name for r in opts.records]
     if len(set(names)) != len(names):
         raise RockbenchError("the study's records must have distinct names")
@@ -533,19 +614,26 @@ def _plan(opts: FragilityOptions, m: IntensityMeasure) -> tuple[tuple[Method, ..
                              f"{opts.design_level!r}")
     if m is IntensityMeasure.SA and opts.oscillator is None:
         raise RockbenchError("the sa measure needs the oscillator's period (--period)")
-    _warn_below_uplift(opts.levels, m, rocking, base.g)
-    methods = _methods(opts)
+    uplift = uplift_acceleration(base)
+    _warn_below_uplift(opts.levels, m, uplift, base.g)
+    rocking = study_rocking(base) if m is IntensityMeasure.PGV_ROCKING else None
+    engines = _engines(opts)
+    reference = _reference(opts, engines)
+    runnable = engines if reference.engine == CONSENSUS else (reference, *engines)
     planned = []
     for rec in opts.records:
         for level in opts.levels:
-            k = scale_factor(rec.record, m, level, rocking, base.g, opts.oscillator)
+            # pga-uplift is a PGA in units of g tan λ, for a block and an assembly alike
+            k = (scale_factor(rec.record, IntensityMeasure.PGA, level * uplift)
+                 if m is IntensityMeasure.PGA_UPLIFT else
+                 scale_factor(rec.record, m, level, rocking, base.g, opts.oscillator))
             exc = dataclasses.replace(rec.record, scale=rec.record.scale * k)
             sc = dataclasses.replace(base, name=f"{base.name}|{rec.name}|{m.value}={level:g}",
                                      excitation=exc, duration=exc.end_time + opts.settle,
                                      output_rate=opts.output_rate)
             planned += [_Planned(rec, float(level), float(exc.scale), meth, sc)
-                        for meth in methods]
-    return methods, planned
+                        for meth in runnable]
+    return (reference, *engines), planned
 
 
 def run_fragility(opts: FragilityOptions,
@@ -563,8 +651,9 @@ def run_fragility(opts: FragilityOptions,
     Raises
     ------
     RockbenchError
-        Bad input: an assembly, no record, bad levels, ``resume`` without a store,
-        an unknown engine or bad settings.
+        Bad input: no record, bad levels, ``resume`` without a store, an unknown engine
+        or bad settings, a structure without a closed form and engines of fewer than two
+        contact-model families, pgv-rocking for an assembly.
     """
     start = time.perf_counter()
     m = IntensityMeasure.parse(opts.measure)
@@ -579,8 +668,7 @@ def run_fragility(opts: FragilityOptions,
     runs = tuple(_run(p, r.metrics, opts.theta_limit, reused=r.reused)
                  for p, r in zip(planned, campaign.results, strict=True))
     wall = time.perf_counter() - start
-    curves = tuple(_curve(opts, runs, meth.label, state) for meth in methods
-                   for state in LimitState)
+    curves = tuple(c for state in LimitState for c in _curves(opts, runs, methods, state))
     return FragilityResult(options=opts, measure=m, methods=methods,
                            records=tuple(opts.records), runs=runs, curves=curves,
                            costs=tuple(_cost(runs, meth.label) for meth in methods),
@@ -608,23 +696,52 @@ def _table(opts: FragilityOptions, runs: Sequence[FragilityRun], method: str,
     return out
 
 
-def _curve(opts: FragilityOptions, runs: Sequence[FragilityRun], method: str,
+def _consensus_table(opts: FragilityOptions, runs: Sequence[FragilityRun],
+                     engines: Sequence[Method], state: LimitState) -> np.ndarray:
+    """The consensus outcome of every record and level (NaN: no consensus there)."""
+    tables = {m.label: _table(opts, runs, m.label, state) for m in engines}
+    out = np.full(next(iter(tables.values())).shape, math.nan)
+    for idx in np.ndindex(out.shape):
+        by_family: dict[str, list[bool | None]] = {}
+        for m in engines:
+            v = tables[m.label][idx]
+            by_family.setdefault(contact_family(m.engine), []).append(
+                None if math.isnan(v) else bool(v))
+        agreed = outcome_consensus(by_family)
+        out[idx] = math.nan if agreed is None else float(agreed)
+    return out
+
+
+def _curves(opts: FragilityOptions, runs: Sequence[FragilityRun],
+            methods: Sequence[Method], state: LimitState) -> list[LimitStateCurve]:
+    """Every method's curve of one limit state; the reference (``methods[0]``) first."""
+    reference, engines = methods[0], methods[1:]
+    ref = (_consensus_table(opts, runs, engines, state) if reference.engine == CONSENSUS
+           else _table(opts, runs, reference.label, state))
+    return [_curve(opts, ref, None, reference.label, state)] + [
+        _curve(opts, _table(opts, runs, m.label, state), ref, m.label, state) for m in engines]
+
+
+def _curve(opts: FragilityOptions, table: np.ndarray, ref: np.ndarray | None, method: str,
            state: LimitState) -> LimitStateCurve:
+    """One method's curve from its outcome table (records × levels), against ``ref``."""
     levels = np.asarray(opts.levels, float)
-    table = _table(opts, runs, method, state)
     n = (~np.isnan(table)).sum(axis=0)
     z = np.nansum(table, axis=0)
     pos = levels > 0
     fit_cols = pos & (n > 0)
     boot = None
     comparison = None
+    agreed = compared = 0
+    if ref is not None:
+        both = ~np.isnan(table) & ~np.isnan(ref)
+        compared, agreed = int(both.sum()), int((table[both] == ref[both]).sum())
     if fit_cols.any():
         data = ExceedanceData.from_outcomes(levels[fit_cols], table[:, fit_cols])
         boot = bootstrap_fragility(data, opts.n_resamples, opts.confidence, opts.seed)
-        ref = _table(opts, runs, REFERENCE, state)[:, pos]
-        if method != REFERENCE and not np.isnan(ref).all():
-            comparison = compare_medians(levels[pos], table[:, pos], ref, opts.n_resamples,
-                                         opts.confidence, opts.seed)
+        if ref is not None and not np.isnan(ref[:, pos]).all():
+            comparison = compare_medians(levels[pos], table[:, pos], ref[:, pos],
+                                         opts.n_resamples, opts.confidence, opts.seed)
     have = n > 0
     islands = find_non_monotone(levels[have], z[have] / n[have]) if have.any() else ()
     rec_islands = []
@@ -635,7 +752,7 @@ def _curve(opts: FragilityOptions, runs: Sequence[FragilityRun], method: str,
                             for isl in find_non_monotone(levels[ok], table[i, ok])]
     return LimitStateCurve(method, state, tuple(float(v) for v in levels),
                            tuple(int(v) for v in n), tuple(int(v) for v in z), boot, comparison,
-                           tuple(islands), tuple(rec_islands))
+                           tuple(islands), tuple(rec_islands), agreed, compared)
 
 
 def _cost(runs: Sequence[FragilityRun], method: str) -> MethodCost:
