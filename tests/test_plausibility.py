@@ -6,12 +6,14 @@ from pathlib import Path
 
 import pytest
 
+from rockbench.campaign.standing import warn_cannot_stand
 from rockbench.checks import MAX_LENGTH
 from rockbench.cli import main
 from rockbench.engines import engine_class
 from rockbench.engines.settings import SettingsError
 from rockbench.errors import PlausibilityWarning, ScenarioError
 from rockbench.geometry import Block, stack
+from rockbench.geometry.builders import parapet
 from rockbench.scenarios import (
     Record,
     Scenario,
@@ -23,7 +25,7 @@ from rockbench.scenarios.catalog import catalog
 from rockbench.scenarios.excitation import MAX_RECORD_SPAN, MIN_RECORD_STEP, STANDARD_GRAVITY
 from rockbench.scenarios.intensity import IntensityMeasure
 from rockbench.scenarios.plausibility import review
-from rockbench.studies.fragility import _warn_below_uplift
+from rockbench.studies.fragility import _warn_below_uplift, uplift_acceleration
 
 BLOCK = """name = "{name}"
 duration = 1.0
@@ -133,11 +135,65 @@ def test_the_cli_prints_a_warning_as_one_line_and_runs(tmp_path: Path, capsys) -
 
 
 def test_pga_levels_all_below_uplift_warn_that_they_are_in_m_per_s2() -> None:
-    rocking = Block(0.25, 0.25, 1.25, mass=1.0).rocking(9.81)  # tan λ = 0.2: uplift 1.962
+    sc = Scenario("b", Block(0.25, 0.25, 1.25, mass=1.0))
+    uplift = uplift_acceleration(sc)  # tan λ = 0.2: uplift 1.962
+    assert uplift == pytest.approx(0.2 * sc.g, rel=1e-12)
     with pytest.warns(PlausibilityWarning, match=r"at most 0\.6 m/s².*g tan λ = 1\.96 m/s² "
                                                  r"\(0\.2 g\).*did you mean g\?"):
-        _warn_below_uplift((0.2, 0.4, 0.6), IntensityMeasure.PGA, rocking, 9.81)
+        _warn_below_uplift((0.2, 0.4, 0.6), IntensityMeasure.PGA, uplift, 9.81)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        _warn_below_uplift((0.2, 2.0), IntensityMeasure.PGA, rocking, 9.81)  # one rocks
-        _warn_below_uplift((0.2, 0.6), IntensityMeasure.PGA_UPLIFT, rocking, 9.81)
+        _warn_below_uplift((0.2, 2.0), IntensityMeasure.PGA, uplift, 9.81)  # one rocks
+        _warn_below_uplift((0.2, 0.6), IntensityMeasure.PGA_UPLIFT, uplift, 9.81)
+
+
+# a parapet 0.3 m wide on a wall 0.6 m wide, its centre `x` from the wall's: beyond
+# x = 0.3 m its centre of mass overhangs the wall's edge and nothing holds it up
+PARAPET = """name = "parapet-{x}"
+duration = 1.0
+[[blocks]]
+width = 0.6
+depth = 0.4
+height = 1.2
+density = 2000.0
+z = 0.6
+[[blocks]]
+width = 0.3
+depth = 0.4
+height = 0.8
+density = 2000.0
+x = {x}
+z = 1.6
+[excitation]
+type = "free"
+"""
+
+
+@pytest.mark.parametrize(("x", "falls"), [(0.25, False), (0.29, False), (0.31, True),
+                                          (0.4, True)])
+def test_a_parapet_that_cannot_stand_is_warned_of_once(x: float, falls: bool) -> None:
+    sc = get_scenario("parapet-offset0.25")
+    geo = parapet(x)
+    sc = sc.replace(name=f"parapet-{x}", geometry=geo)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        warned = warn_cannot_stand([sc, sc.replace(name="again")])
+    assert warned == ([sc.name] if falls else [])
+    msgs = [str(w.message) for w in caught if w.category is PlausibilityWarning]
+    assert len(msgs) == int(falls)
+    if falls:
+        assert "cannot stand at rest under its own weight" in msgs[0]
+
+
+def test_the_cli_warns_of_a_parapet_that_cannot_stand_and_runs(tmp_path: Path,
+                                                               capsys) -> None:
+    path = tmp_path / "overhang.toml"
+    path.write_text(PARAPET.format(x=0.4))
+    code = main(["run", str(path), "--engine", "pymunk"])
+    out = capsys.readouterr()
+    err = [ln for ln in out.err.strip().splitlines() if ln]
+    assert code == 0
+    assert len(err) == 1 and err[0].startswith("rockbench: warning: scenario 'parapet-0.4' "
+                                               "cannot stand at rest")
+    # and it does fall, with no base motion at all
+    assert "overturned" in out.out

@@ -37,6 +37,7 @@ from rockbench.campaign.predictability import (
     predictability,
 )
 from rockbench.campaign.references import references
+from rockbench.campaign.standing import warn_cannot_stand
 from rockbench.engines import engine_class
 from rockbench.errors import RockbenchError
 from rockbench.evaluation import RunMetrics, RunResult, evaluate_run
@@ -307,6 +308,7 @@ def run_campaign(plan: Sequence[PlannedRun], options: CampaignOptions, *,
     with store if store is not None else contextlib.nullcontext():
         ctx = _Context(plan, options, store)
         scenarios = list({r.scenario.name: r.scenario for r in plan}.values())
+        warn_cannot_stand(scenarios)
         refs: dict[str, Trajectory | None] = {}
         notes: dict[str, str] = {}
         if options.references or any(r.method.is_reference for r in plan):
