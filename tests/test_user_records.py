@@ -90,7 +90,7 @@ def test_the_fragility_study_takes_a_folder(folder: Path) -> None:
     ('[[records]]\nfile = "site-a.csv"\nunits = "mm"\n', r"units must be 'g' or 'm/s2'"),
     ('[[records]]\nfile = "site-a.csv"\n[[records]]\nfile = "site-a.csv"\n',
      r"two records are named 'site-a'"),
-    ('[[records]]\nname = "x"\n', r"\[\[records\]\] #1 is missing 'file'"),
+    ('[[records]]\nname = "x"\n', r"\[\[records\]\] #1 needs either 'file' \(one record\) or 'x'"),
     ('colour = "red"\n', r"unknown key 'colour'"),
 ])
 def test_bad_manifests_name_the_file_and_the_field(folder: Path, content: str,

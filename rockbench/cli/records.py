@@ -57,11 +57,17 @@ def execute_records(args: argparse.Namespace) -> int:
         for col in ("record", "event", "year", "station", "comp.", "dt (s)", "duration (s)",
                     "PGA (g)", "PGV (m/s)", "provenance"):
             table.add_column(col, overflow="fold", no_wrap=col in ("record", "comp.", "year"))
-        for r in s.records:
+        for r in s.records + s.verticals:
+            comp = f"{r.component} (vertical)" if r in s.verticals else r.component
             table.add_row(r.name, escape(r.event), str(r.year or ""), escape(r.station),
-                          escape(r.component), f"{r.dt:g}", f"{r.duration:.2f}",
+                          escape(comp), f"{r.dt:g}", f"{r.duration:.2f}",
                           f"{r.pga / STANDARD_GRAVITY:.3f}", f"{r.pgv:.3f}", escape(r.provenance))
         console.print(table)
+        if s.motions:
+            console.print(f"{s.name}: {len(s.motions)} ground motions (--components xz in "
+                          "fragility): " + "; ".join(
+                              f"{m.name} = " + ", ".join(f"{a} {getattr(m, a)}" for a in m.axes)
+                              for m in s.motions), highlight=False)
     for s in sets:
         if isinstance(s, UnavailableRecordSet):
             console.print(f"{s.name}: unavailable ({escape(s.reason)}); install it with: "

@@ -305,11 +305,13 @@ def _islands_paragraph(curves: Sequence[LimitStateCurve], theta_limit: float) ->
 
 def _records_table(result: FragilityResult, number: int) -> Table:
     t = Table(key="records", title=f"Table {number}. Records used",
-              caption="Each record at scale 1 (baseline-corrected once), with its provenance.",
+              caption=("Each record at scale 1 (baseline-corrected once), with its provenance; "
+                       "for a motion of several components, PGA and PGV are its x "
+                       "component's (the one the levels measure)."),
               columns=["record", "event", "station", "duration (s)", "PGA (g)",
                        "PGV (m/s)", "provenance"])
     for r in result.records:
-        rec = r.record
+        rec = r.horizontal
         t.add_row([Cell(r.name, kind="head"), r.event or "–", r.station or "–",
                    f"{rec.end_time:.2f}", f"{rec.peak_acceleration() / STANDARD_GRAVITY:.3g}",
                    f"{rec.peak_velocity():.3g}", r.provenance or "–"])

