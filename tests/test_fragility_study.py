@@ -262,6 +262,9 @@ def test_medians_are_given_in_physical_units_and_methods_with_their_preset(tmp_p
     res = study(block_scenario(1.0), noise_records(2), (1.0, 3.0), engines=["pymunk"],
                 presets=["fast"], settle=1.0, design_level=2.0)
     assert res.in_units(1.0) == f"{0.2 * res.options.scenario.g:.3g} m/s² (0.2 g)"
+    # intervals too: [1, 2] × g tan λ = [0.2, 0.4] g
+    assert res.interval_in_units(1.0, 2.0) == "[1.96, 3.92] m/s² ([0.2, 0.4] g)"
+    assert res.interval_in_units(1.0, math.inf) == ""
     pga = dataclasses.replace(res, measure=IntensityMeasure.PGA)
     assert pga.in_units(res.options.scenario.g) == "1 g"
     assert dataclasses.replace(res, measure=IntensityMeasure.PGV).in_units(1.0) == ""

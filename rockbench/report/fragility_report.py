@@ -201,7 +201,8 @@ def _fit_table(result: FragilityResult, state: LimitState, number: int) -> Table
                  f"{ref} reference's, of those where both have one; the cost of the method "
                  "over the whole study. 'extrapolated': the median lies outside the tested "
                  "levels."),
-        columns=["method", "θ", "θ in units", f"θ {conf}", "β", f"β {conf}",
+        columns=["method", "θ", "θ in units", f"θ {conf}", f"θ {conf} in units", "β",
+                 f"β {conf}",
                  f"θ / θ_{ref}", f"ratio {conf}", f"agrees with {ref}", "runs",
                  "no outcome", "CPU time (s)"])
     costs = {c.method: c for c in result.costs}
@@ -212,11 +213,12 @@ def _fit_table(result: FragilityResult, state: LimitState, number: int) -> Table
         cells: list[Cell | str] = [Cell(meth.label, kind="head")]
         boot = c.bootstrap
         if boot is None:
-            cells += [Cell("no completed run", kind="crashed")] + ["–"] * 6
+            cells += [Cell("no completed run", kind="crashed")] + ["–"] * 7
         elif boot.fit.ok:
             med = _num(boot.fit.median) + (" (extrapolated)" if boot.fit.extrapolated else "")
             cells += [Cell(med, kind), Cell(result.in_units(boot.fit.median) or "–", kind),
                       Cell(_interval(boot.median_interval), kind),
+                      Cell(result.interval_in_units(*boot.median_interval) or "–", kind),
                       Cell(_num(boot.fit.dispersion), kind),
                       Cell(_interval(boot.dispersion_interval), kind)]
             cmp = c.comparison
@@ -227,7 +229,7 @@ def _fit_table(result: FragilityResult, state: LimitState, number: int) -> Table
             else:
                 cells += ["–", "–"]
         else:
-            cells += [Cell(_fit_text(boot.fit), kind)] + ["–"] * 6
+            cells += [Cell(_fit_text(boot.fit), kind)] + ["–"] * 7
         cells.append(Cell("–", kind) if meth.is_reference else
                      f"{c.agreed}/{c.compared}" if c.compared else "–")
         if meth.engine == CONSENSUS:  # not a method that runs: it has no runs of its own

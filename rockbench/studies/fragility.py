@@ -546,26 +546,38 @@ class FragilityResult:
     reused: int
     wall_time: float
 
-    def in_units(self, value: float) -> str:
-        """A level of the study's measure in physical units ("" when it already is one).
-
-        PGA/(g tan λ) × g tan λ is a PGA (m/s², and in g), PGV p/(g tan λ) × g tan λ / p a
-        PGV (m/s), with the block's constants (:func:`study_rocking`); a PGA or Sa is also
-        given in g.
-        """
-        if not math.isfinite(value):
-            return ""
+    def _units(self) -> tuple[tuple[float, str], ...]:
+        """The factors that turn a level into physical units, each with its unit."""
         scenario, m = self.options.scenario, self.measure
         g = scenario.g
         if m is IntensityMeasure.PGA_UPLIFT:
             uplift = uplift_acceleration(scenario)
-            return f"{value * uplift:.3g} m/s² ({value * uplift / g:.3g} g)"
+            return ((uplift, "m/s²"), (uplift / g, "g"))
         if m is IntensityMeasure.PGV_ROCKING:
             rocking = study_rocking(scenario)
-            return f"{value * g * math.tan(rocking.lam) / rocking.p:.3g} m/s"
+            return ((g * math.tan(rocking.lam) / rocking.p, "m/s"),)
         if m in (IntensityMeasure.PGA, IntensityMeasure.SA):
-            return f"{value / g:.3g} g"
-        return ""
+            return ((1.0 / g, "g"),)
+        return ()
+
+    def in_units(self, value: float) -> str:
+        """A level of the study's measure in physical units ("" when it already is one).
+
+        PGA/(g tan λ) × g tan λ is a PGA (m/s², and in g), PGV p/(g tan λ) × g tan λ / p a
+        PGV (m/s), with the structure's constants (:func:`uplift_acceleration`,
+        :func:`study_rocking`); a PGA or Sa is also given in g.
+        """
+        if not math.isfinite(value):
+            return ""
+        parts = [f"{value * k:.3g} {unit}" for k, unit in self._units()]
+        return " ".join([parts[0], *(f"({p})" for p in parts[1:])]) if parts else ""
+
+    def interval_in_units(self, low: float, high: float) -> str:
+        """An interval of levels in physical units, as :meth:`in_units` ("" where it cannot)."""
+        if not (math.isfinite(low) and math.isfinite(high)):
+            return ""
+        parts = [f"[{low * k:.3g}, {high * k:.3g}] {unit}" for k, unit in self._units()]
+        return " ".join([parts[0], *(f"({p})" for p in parts[1:])]) if parts else ""
 
     @property
     def reference(self) -> Method:
