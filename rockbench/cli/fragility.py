@@ -1,4 +1,4 @@
-"""``rockbench fragility``: overturning fragility of one block or stack over a record set.
+"""``rockbench fragility``: overturning fragility of a block, stack or assembly over a record set.
 
 Examples::
 
@@ -29,11 +29,13 @@ from rockbench.errors import RockbenchError
 if TYPE_CHECKING:
     from rockbench.scenarios import Scenario
     from rockbench.scenarios.floor import BuildingMode
+    from rockbench.scenarios.shear_building import ShearBuilding
 
 __all__ = ["COMMANDS", "configure_fragility", "execute_fragility"]
 
 #: The commands of this module: name → one-line help.
-COMMANDS = {"fragility": "overturning fragility of a block or stack over a record set (IDA)"}
+COMMANDS = {"fragility": "overturning fragility of a block, stack or assembly over a record set "
+                          "(IDA)"}
 
 #: Density of the --block shortcut (kg/m³, stone masonry).
 BLOCK_DENSITY = 2000.0
@@ -46,20 +48,32 @@ def configure_fragility(p: argparse.ArgumentParser) -> None:
 
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument("--scenario", metavar="NAME|FILE",
-                      help="a catalog scenario or .toml file: its block or stack, contact and "
-                           "gravity (its excitation and duration are replaced)")
+                      help="a catalog scenario or .toml file: its block, stack or assembly, "
+                           "contact and gravity (its excitation and duration are replaced); "
+                           "an assembly needs engines of two contact-model families")
     what.add_argument("--block", metavar="WIDTH,HEIGHT",
                       help="a single block of this width and height (m), square in plan, "
                            f"{BLOCK_DENSITY:g} kg/m³, Housner's restitution")
     p.add_argument("--record-set", required=True, metavar="SET",
                    help="record set (see `rockbench records`)")
     p.add_argument("--records", default=None, metavar="A,B",
-                   help="only these records of the set (default: all)")
-    p.add_argument("--floor", default=None, metavar="T[,ZETA[,GAMMA_PHI]]",
+                   help="only these records (with --components xz: ground motions) of the "
+                        "set (default: all)")
+    p.add_argument("--components", default="x", choices=["x", "xz"],
+                   help="x: each horizontal record alone along x (default); xz: each ground "
+                        "motion of the set with its vertical component along z, scaled "
+                        "together by the horizontal's intensity (the analytic model and the "
+                        "engines that apply a vertical base motion run it)")
+    p.add_argument("--floor", default=None,
+                   metavar="T[,ZETA[,GAMMA_PHI]]|shear:N=N,T1=T1[,zeta=ZETA][,storey=K]",
                    help="shake the block with the floor motion of a linear building mode "
                         "instead of the ground's: period T (s), damping ratio (default 0.05) "
                         "and participation × mode shape at the block's height (default 1); "
-                        "a pga level is then a peak floor acceleration")
+                        "or with that of storey K (1 to N from the ground, default N: the "
+                        "roof) of a uniform shear building of N storeys, first period T1 (s) "
+                        "and damping ratio ZETA in every mode (default 0.05), its modes "
+                        "superposed (the lowest 20 of a taller one); a pga level is then a "
+                        "peak floor acceleration")
     p.add_argument("--measure", default="pga-uplift",
                    choices=[m.value for m in IntensityMeasure],
                    help="intensity measure of the levels: PGA (m/s²), PGV (m/s), "
@@ -98,6 +112,13 @@ def configure_fragility(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar or summary")
 
 
+#: What ``--floor shear:...`` takes, for its error messages.
+_SHEAR_FORM = ("shear:N=STOREYS,T1=PERIOD[,zeta=RATIO][,storey=K] (N whole, T1 in s, zeta "
+               "default 0.05, storey 1 to N, default N: the roof)")
+#: The keys of ``--floor shear:...``, lower-cased.
+_SHEAR_KEYS = ("n", "t1", "zeta", "storey")
+
+
 def _building_mode(text: str) -> BuildingMode:
     from rockbench.scenarios.floor import BuildingMode
 
@@ -106,9 +127,58 @@ def _building_mode(text: str) -> BuildingMode:
     except ValueError:
         values = []
     if not 1 <= len(values) <= 3:
-        raise RockbenchError(f"--floor takes T[,ZETA[,GAMMA_PHI]] (s, ratio, factor), got "
-                             f"{text!r}")
+        raise RockbenchError(f"--floor takes T[,ZETA[,GAMMA_PHI]] (s, ratio, factor) or "
+                             f"shear:N=STOREYS,T1=PERIOD[,zeta=RATIO][,storey=K], got {text!r}")
     return BuildingMode(*values)
+
+
+def _shear_building(text: str) -> tuple[ShearBuilding, int]:
+    """The building and storey of ``--floor shear:N=4,T1=0.4[,zeta=0.05][,storey=4]``."""
+    from rockbench import checks
+    from rockbench.errors import ScenarioError
+    from rockbench.scenarios.shear_building import ShearBuilding
+
+    def bad(why: str) -> RockbenchError:
+        return RockbenchError(f"--floor {text!r}: {why}; expected {_SHEAR_FORM}")
+
+    head, colon, body = text.partition(":")
+    if head.strip().lower() != "shear" or not colon or not body.strip():
+        raise bad("no building after 'shear:'")
+    fields: dict[str, float] = {}
+    for item in body.split(","):
+        key, eq, value = (part.strip() for part in item.partition("="))
+        if not eq or not key:
+            raise bad(f"{item.strip()!r} is not KEY=VALUE")
+        if key.lower() not in _SHEAR_KEYS:
+            raise bad(f"unknown key {key!r}")
+        if key.lower() in fields:
+            raise bad(f"{key!r} given twice")
+        try:
+            fields[key.lower()] = float(value)
+        except ValueError:
+            raise bad(f"{key}={value!r} is not a number") from None
+    missing = [k for k in ("N", "T1") if k.lower() not in fields]
+    if missing:
+        raise bad(f"{' and '.join(missing)} missing")
+    try:
+        building = ShearBuilding.from_period(int(checks.integer(fields["n"], "N")),
+                                             fields["t1"], fields.get("zeta", 0.05))
+        storey = int(checks.integer(fields.get("storey", building.storeys), "storey"))
+        building.describe(storey)  # refuses a storey the building does not have
+    except ScenarioError as exc:
+        raise bad(str(exc)) from None
+    return building, storey
+
+
+def _floor_model(text: str) -> tuple[BuildingMode | ShearBuilding, int | None, str]:
+    """The model of ``--floor``, the storey (shear building) and the set-name text."""
+    if text.strip().lower().startswith("shear"):
+        building, storey = _shear_building(text.strip())
+        return building, storey, (f"floor motions "
+                                  f"({building.describe(storey, building.default_modes)})")
+    mode = _building_mode(text)
+    return mode, None, (f"floor motions (T = {mode.period:g} s, ζ = {mode.damping:g}, "
+                        f"Γφ = {mode.amplification:g})")
 
 
 def _scenario(args: argparse.Namespace) -> Scenario:
@@ -141,13 +211,12 @@ def execute_fragility(args: argparse.Namespace) -> int:
     levels = parse_levels(args.levels)
     names = ([n.strip() for n in args.records.split(",") if n.strip()]
              if args.records else None)
-    records = set_records(args.record_set, names)
+    records = set_records(args.record_set, names, axes=args.components)
     set_name = args.record_set
     if args.floor:
-        mode = _building_mode(args.floor)
-        records = floor_records(records, mode)
-        set_name += (f", floor motions (T = {mode.period:g} s, ζ = {mode.damping:g}, "
-                     f"Γφ = {mode.amplification:g})")
+        model, storey, floor_text = _floor_model(args.floor)
+        records = floor_records(records, model, storey=storey)
+        set_name += f", {floor_text}"
     engines = [e for e in selected_engines(args.engine) if e != REFERENCE]
     settings = engine_settings(argparse.Namespace(**{**vars(args), "preset": None}), engines)
     preset = args.preset or "accurate"

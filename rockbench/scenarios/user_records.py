@@ -34,6 +34,7 @@ read by :meth:`rockbench.scenarios.excitation.Record.from_file`, and
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -142,16 +143,17 @@ def _entry(raw: object, i: int, root: Path) -> list[UserRecord]:
         raise ScenarioError(f"{where} has {', '.join(axes)} but no 'x': the first horizontal "
                             f"component is the one a planar study runs")
     name = checks.text(data.get("name", next(iter(files.values())).stem), f"{where} name")
-    common = dict(
-        units=units, scale=checks.number(data.get("scale", 1.0), f"{where} scale"),
+    one = UserRecord(
+        name=name, path=next(iter(files.values())), units=units,
+        scale=checks.number(data.get("scale", 1.0), f"{where} scale"),
         event=checks.text(data.get("event", ""), f"{where} event"),
         station=checks.text(data.get("station", ""), f"{where} station"),
+        component=checks.text(data.get("component", ""), f"{where} component"),
         year=int(checks.integer(data.get("year", 0), f"{where} year", low=0)))
     if "file" in data:
-        return [UserRecord(name=name, path=files[""], component=checks.text(
-            data.get("component", ""), f"{where} component"), **common)]
-    return [UserRecord(name=f"{name}-{a}", path=path, component=a, axis=a, motion=name,
-                       **common) for a, path in files.items()]
+        return [one]
+    return [dataclasses.replace(one, name=f"{name}-{a}", path=path, component=a, axis=a,
+                                motion=name) for a, path in files.items()]
 
 
 def read_user_set(spec: str, base: Path | None = None) -> UserSet:

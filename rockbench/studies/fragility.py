@@ -217,28 +217,35 @@ def floor_records(records: Sequence[StudyRecord], mode: BuildingMode | ShearBuil
     ``storey`` (default: the roof) the part stands on. The study then scales the floor
     motions: a ``pga`` level is a peak floor acceleration.
 
+    A motion of several components has its horizontal ones filtered by the building and
+    its vertical one passed on unchanged: a building is stiff axially (its vertical
+    periods are a small fraction of its lateral ones), so its floors move up and down
+    with the ground.
+
     Raises
     ------
     RockbenchError
-        A storey given with a :class:`BuildingMode`, or a record of several components;
-        a ``ScenarioError`` for a storey the shear building does not have.
+        A storey given with a :class:`BuildingMode`; a ``ScenarioError`` for a storey the
+        shear building does not have.
     """
-    def along_x(r: StudyRecord) -> Record:
-        # the building models filter one horizontal component
-        if not isinstance(r.record, Record):
-            raise RockbenchError(f"floor motions are made from one-component records; "
-                                 f"{r.name!r} has several")
-        return r.record
+    def through(r: StudyRecord, floor: Callable[[Record], Record]) -> Record | Components:
+        if isinstance(r.record, Record):
+            return floor(r.record)
+        c = r.record
+        return Components(**{a: m if a == "z" else floor(m)
+                             for a, m in zip("xyz", (c.x, c.y, c.z), strict=True)
+                             if isinstance(m, Record)})
 
     if isinstance(mode, ShearBuilding):
         k = mode.storeys if storey is None else storey
         tag = mode.describe(k, mode.default_modes)
-        return tuple(dataclasses.replace(r, record=shear_floor_record(along_x(r), mode, k),
-                                         provenance=f"{r.provenance}; {tag}") for r in records)
+        return tuple(dataclasses.replace(
+            r, record=through(r, lambda g: shear_floor_record(g, mode, k)),
+            provenance=f"{r.provenance}; {tag}") for r in records)
     if storey is not None:
         raise RockbenchError("a storey is a floor of a ShearBuilding, not of a BuildingMode")
     tag = f"floor of T = {mode.period:g} s, ζ = {mode.damping:g}, Γφ = {mode.amplification:g}"
-    return tuple(dataclasses.replace(r, record=floor_record(along_x(r), mode),
+    return tuple(dataclasses.replace(r, record=through(r, lambda g: floor_record(g, mode)),
                                      provenance=f"{r.provenance}; {tag}") for r in records)
 
 
