@@ -30,6 +30,8 @@ if TYPE_CHECKING:
     from rockbench.scenarios import Scenario
     from rockbench.scenarios.floor import BuildingMode
     from rockbench.scenarios.shear_building import ShearBuilding
+    from rockbench.studies.code_check import CodeCheckResult
+    from rockbench.studies.code_comparison import CodeBeside
 
 __all__ = ["COMMANDS", "configure_fragility", "execute_fragility"]
 
@@ -84,6 +86,12 @@ def configure_fragility(p: argparse.ArgumentParser) -> None:
     p.add_argument("--design-level", type=float, default=None, metavar="A",
                    help="report each method's probability of exceeding each limit state at "
                         "this intensity (the measure's units), with its interval")
+    p.add_argument("--code-check", default=None, metavar="SITE.toml",
+                   help="the NTC 2018 kinematic check of the element at this site (see "
+                        "`rockbench check`) beside the study: P(overturn) at the code's "
+                        "design PGA (the default --design-level) and how many times each "
+                        "check's capacity the median overturning PGA is; needs --measure pga "
+                        "or pga-uplift")
     p.add_argument("--period", type=float, default=None, metavar="T",
                    help="period of the sa measure (s)")
     p.add_argument("--damping", type=float, default=0.05, metavar="ZETA",
@@ -181,6 +189,42 @@ def _floor_model(text: str) -> tuple[BuildingMode | ShearBuilding, int | None, s
                         f"Γφ = {mode.amplification:g})")
 
 
+def _code_check(args: argparse.Namespace, scenario: Scenario,
+                design: float | None) -> tuple[CodeCheckResult, float]:
+    """The code check of ``--code-check`` and the design level (the code's, unless given)."""
+    import warnings
+
+    from rockbench.errors import PlausibilityWarning
+    from rockbench.studies.code_check import code_check, load_site
+    from rockbench.studies.code_comparison import design_level
+
+    site = load_site(args.code_check)
+    check = code_check(scenario, site)
+    level = design_level(check, args.measure, scenario)
+    if (site.building is not None) != bool(args.floor):
+        warnings.warn(
+            f"{args.code_check}: the site puts the element "
+            + ("on a building, but the records shake it directly: add --floor so that the "
+               "study's PGA is the floor's, as the code's design PGA is"
+               if site.building is not None else
+               "on the ground, but --floor shakes it with a floor motion: the code's design "
+               "PGA is the ground's"), PlausibilityWarning, stacklevel=2)
+    return check, level if design is None else design
+
+
+def _print_code(code: CodeBeside, g: float) -> None:
+    """One line of the code's verdict, one per method against it."""
+    c = code.check
+    print(f"code check (NTC 2018): {'passes' if c.passed else 'fails'}; design PGA "
+          f"{c.design_pga:.3g} m/s² ({c.design_pga / g:.3g} g); capacity PGA linear "
+          f"{c.capacity_pga('linear'):.3g}, non-linear {c.capacity_pga('nonlinear'):.3g} m/s²")
+    for m in code.methods:
+        p = (f"P(overturn | design) {m.probability.probability:.3f}" if m.probability
+             else "no fit")
+        print(f"{m.method:>18} {p}; median overturning PGA {m.median_pga:.3g} m/s² = "
+              f"{m.nonlinear_margin:.2f} × the non-linear capacity")
+
+
 def _scenario(args: argparse.Namespace) -> Scenario:
     from rockbench.scenarios import Block, Scenario, get_scenario, single
 
@@ -229,6 +273,10 @@ def execute_fragility(args: argparse.Namespace) -> int:
     check_output_path(out / "runs.csv", "--out")
     if not args.no_db:
         check_output_path(args.db, "--db")
+    check = None
+    design = args.design_level
+    if args.code_check:
+        check, design = _code_check(args, scenario, design)
     oscillator = None
     if args.period is not None:
         from rockbench.scenarios.oscillator import Oscillator
@@ -236,7 +284,7 @@ def execute_fragility(args: argparse.Namespace) -> int:
         oscillator = Oscillator(args.period, args.damping)
     opts = FragilityOptions(
         scenario=scenario, records=records, levels=levels, measure=args.measure,
-        oscillator=oscillator, design_level=args.design_level,
+        oscillator=oscillator, design_level=design,
         engines=engines, presets=[preset], overrides=overrides, theta_limit=args.theta_limit,
         settle=args.settle, output_rate=args.output_rate,
         execution=execution_options(args, isolate=not args.no_isolate), resume=args.resume,
@@ -248,7 +296,12 @@ def execute_fragility(args: argparse.Namespace) -> int:
         return Progress(total, description, quiet=args.quiet)
 
     result = run_fragility(opts, progress=None if args.quiet else progress)
-    files = write_report(result, out)
+    code = None
+    if check is not None:
+        from rockbench.studies.code_comparison import code_beside
+
+        code = code_beside(result, check)
+    files = write_report(result, out, code=code)
     if not args.quiet:
         for c in result.curves:
             boot = c.bootstrap
@@ -260,13 +313,15 @@ def execute_fragility(args: argparse.Namespace) -> int:
                 phys = result.in_units(fit.median)
                 text = (f"median {fit.median:.3g}{f' = {phys}' if phys else ''} "
                         f"[{lo:.3g}, {hi:.3g}], dispersion {fit.dispersion:.3g}")
-                if args.design_level is not None:
-                    at = boot.probability_at(args.design_level)
-                    text += (f"; P at {at.level:g}: {at.probability:.3f} "
+                if design is not None:
+                    at = boot.probability_at(design)
+                    text += (f"; P at {at.level:.4g}: {at.probability:.3f} "
                              f"[{at.interval[0]:.3f}, {at.interval[1]:.3f}]")
             else:
                 text = fit.status.value
             print(f"{c.method:>18} {c.state.value:<12} {text}")
+        if code is not None:
+            _print_code(code, scenario.g)
         print(f"{len(result.runs)} runs ({result.ran} run, {result.reused} reused); "
               f"{result.wall_time:.1f} s")
         for f in files:

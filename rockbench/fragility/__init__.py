@@ -7,6 +7,7 @@ from rockbench.fragility.fit import (
     FragilityBootstrap,
     FragilityError,
     FragilityFit,
+    LevelProbability,
     bootstrap_fragility,
     fit_fragility,
 )
@@ -24,6 +25,7 @@ from rockbench.scenarios.intensity import (
 
 __all__ = [
     "ExceedanceData", "FitStatus", "FragilityBootstrap", "FragilityError", "FragilityFit",
+    "LevelProbability",
     "bootstrap_fragility", "fit_fragility",
     "IntensityMeasure", "PulseRatios", "intensity", "peak_ground_acceleration",
     "peak_ground_velocity", "pulse_ratios", "scale_factor", "scale_record",

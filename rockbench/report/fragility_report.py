@@ -42,6 +42,7 @@ from rockbench.report.html import write_document
 from rockbench.report.tables import Cell, Table
 from rockbench.scenarios.excitation import STANDARD_GRAVITY
 from rockbench.store import jsonable
+from rockbench.studies.code_comparison import CodeBeside
 from rockbench.studies.fragility import (
     FragilityOptions,
     FragilityResult,
@@ -346,14 +347,76 @@ def _write_runs(result: FragilityResult, out: Path) -> list[Path]:
     return [csv_path, json_path]
 
 
+def _pga(v: float, g: float) -> str:
+    return f"{v:.3g} m/s² ({v / g:.3g} g)" if math.isfinite(v) else "–"
+
+
+def _code_section(result: FragilityResult, code: CodeBeside, number: int) -> Section:
+    """The code's verdict beside each method's P(overturn) at the design PGA and margins."""
+    check, g = code.check, result.options.scenario.g
+    site = check.site
+    where = ("on the ground" if site.building is None else
+             f"at z = {site.building.element_height:g} m of a {site.building.storeys}-storey "
+             f"building (H = {site.building.height:g} m, T₁ = {site.building.period:g} s)")
+    sec = Section("code", "The code check beside the dynamics")
+    parts = []
+    for name, done in (("linear", check.checks("linear")),
+                       ("non-linear", check.checks("nonlinear"))):
+        if not done:
+            parts.append(f"the {name} check is not done (no mechanism, or no finite "
+                         f"kinematics)")
+            continue
+        worst = min(done, key=lambda dc: dc[1].ratio)
+        parts.append(f"the {name} check {'passes' if all(c.passed for _, c in done) else 'fails'} "
+                     f"(weaker direction {worst[0].label}: ratio {worst[1].ratio:.3f}, capacity "
+                     f"PGA {_pga(worst[1].capacity_pga, g)})")
+    sec.paragraphs.append(
+        f"NTC 2018 kinematic analysis (Circolare 2019 §C8.7.1.2.1) at a_g = {site.ag:g} g, soil "
+        f"{site.soil}, F₀ = {site.F0:g}, T_C* = {site.TC_star:g} s, q = {site.q:g}, FC = "
+        f"{site.confidence_factor:g}, {where}: design PGA at the element's base "
+        f"{_pga(check.design_pga, g)} (level {code.design_level:.4g} of "
+        f"{result.measure.label}). The " + "; ".join(parts)[4:] + ". Overall the element "
+        + ("passes." if check.passed else "fails.") + " `rockbench check` gives the whole check.")
+    ref = code.methods[0]
+    if ref.probability is not None and math.isfinite(ref.nonlinear_margin):
+        verdict = ("conservative" if ref.nonlinear_margin > 1 else "not conservative")
+        sec.paragraphs.append(
+            f"Against the {ref.method} reference the code's non-linear check is {verdict} here: "
+            f"the element overturns, in the median, at {ref.nonlinear_margin:.2f} times the "
+            f"acceleration the check accepts; at the design PGA it overturns with probability "
+            f"{ref.probability.probability:.3f}.")
+    conf = f"{100 * result.options.confidence:g} %"
+    t = Table(key="code", title=f"Table {number}. Overturning against the code",
+              caption=(f"P(overturning | PGA = the code's design PGA) with its {conf} "
+                       "interval; the median overturning PGA at the element's base; the "
+                       "margins: that median over each check's capacity PGA (above 1 the code "
+                       "is conservative by that factor)."),
+              columns=["method", "P(overturn | design)", f"P {conf}", "median overturning PGA",
+                       "median / linear capacity", "median / non-linear capacity"])
+    for m in code.methods:
+        p = m.probability
+        kind = "ref" if m is ref else ""
+        t.add_row([Cell(m.method, kind="head"),
+                   Cell(f"{p.probability:.3f}", kind) if p else "–",
+                   _interval(p.interval, "{:.3f}") if p else "–",
+                   Cell(_pga(m.median_pga, g), kind), _num(m.linear_margin, "{:.2f}"),
+                   _num(m.nonlinear_margin, "{:.2f}")])
+    sec.items.append(t)
+    return sec
+
+
 def _oscillator(opts: FragilityOptions) -> str:
     """The period and damping of a spectral measure, for the report's header."""
     o = opts.oscillator
     return "" if o is None else f", T = {o.period:g} s, ζ = {o.damping:g}"
 
 
-def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = True) -> list[Path]:
+def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = True,
+                 code: CodeBeside | None = None) -> list[Path]:
     """Write ``index.html``, ``report.md``, ``runs.csv``, ``runs.json`` and ``figures/``.
+
+    ``code``: the code check of the element beside the study
+    (:func:`rockbench.studies.code_comparison.code_beside`), a section of its own.
 
     Returns
     -------
@@ -388,6 +451,9 @@ def write_report(result: FragilityResult, out: Path, *, embed_figures: bool = Tr
         sec.paragraphs.append(_islands_paragraph(
             [c for c in result.curves if c.state is state], opts.theta_limit))
         sections.append(sec)
+    if code is not None:
+        number += 1
+        sections.append(_code_section(result, code, number))
     isec = Section("ida", "Incremental dynamic analysis curves")
     path = ida_figure(out / "figures" / "ida.png", result)
     isec.items.append(FigureItem(str(path.relative_to(out)), (
