@@ -387,3 +387,47 @@ def test_check_command_bad_site_is_one_line(tmp_path, capsys):
     assert rc == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and str(site) in err and "F0" in err
+
+
+# ------------------------------------------------------------- Eurocode 8, beside it
+@pytest.mark.fast
+@pytest.mark.parametrize(("z", "period", "expected"), [
+    # [4.25] with T_a = 0: α S (3 (1 + z/H) / 2 − 0.5); never below α S
+    (0.0, 0.4, 0.25 * 1.15 * 1.0),
+    (6.0, 0.4, 0.25 * 1.15 * (3 * 1.5 / 2 - 0.5)),
+    (12.0, 0.4, 0.25 * 1.15 * 2.5),
+])
+def test_ec8_element_coefficient_by_hand(z, period, expected):
+    from rockbench.analytic.ec8_elements import element_coefficient, soil_factor
+
+    assert soil_factor("C") == 1.15
+    got = element_coefficient(0.25, soil_factor("C"), z, 12.0, 0.0, period)
+    assert got == pytest.approx(expected, rel=1e-12)
+    # an element in resonance with the building (T_a = T_1): 3 (1 + z/H) − 0.5
+    assert element_coefficient(0.25, 1.15, z, 12.0, period, period) == pytest.approx(
+        0.25 * 1.15 * (3 * (1 + z / 12.0) - 0.5), rel=1e-12)
+
+
+@pytest.mark.fast
+def test_ec8_check_of_a_block_on_a_roof_by_hand(roof):
+    # α0 = b/h = 0.2 against S_a γ_a / q_a = 0.25 · 1.15 · 2.5 = 0.71875 (q_a = γ_a = 1)
+    e = code_check(block_scenario(), roof).ec8
+    assert e is not None
+    assert e.alpha0 == pytest.approx(0.2, rel=1e-9)
+    assert e.coefficient == pytest.approx(0.71875, rel=1e-12)
+    assert e.ratio == pytest.approx(0.2 / 0.71875, rel=1e-9) and not e.passed
+    assert e.capacity_pga == pytest.approx(0.2 * e.g, rel=1e-9)
+    # a wall (q_a = 2) of ordinary importance on the ground passes: 0.2 · 2 / 0.2875 > 1
+    site = SiteParameters(0.25, 2.4, 0.3, "C", ec8_qa=2.0)
+    assert code_check(block_scenario(), site).ec8.ratio == pytest.approx(0.4 / 0.2875, rel=1e-9)
+
+
+@pytest.mark.fast
+def test_ec8_table_of_the_site_file(tmp_path):
+    path = tmp_path / "site.toml"
+    path.write_text('ag = 0.25\nF0 = 2.4\nTC_star = 0.3\n[ec8]\nqa = 2.0\nimportance = 1.4\n')
+    site = load_site(path)
+    assert (site.ec8_qa, site.ec8_importance) == (2.0, 1.4)
+    path.write_text('ag = 0.25\nF0 = 2.4\nTC_star = 0.3\n[ec8]\nq = 2.0\n')
+    with pytest.raises(ScenarioError, match=r"\[ec8\]"):
+        load_site(path)

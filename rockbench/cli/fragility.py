@@ -217,7 +217,9 @@ def _print_code(code: CodeBeside, g: float) -> None:
     c = code.check
     print(f"code check (NTC 2018): {'passes' if c.passed else 'fails'}; design PGA "
           f"{c.design_pga:.3g} m/s² ({c.design_pga / g:.3g} g); capacity PGA linear "
-          f"{c.capacity_pga('linear'):.3g}, non-linear {c.capacity_pga('nonlinear'):.3g} m/s²")
+          f"{c.capacity_pga('linear'):.3g}, non-linear {c.capacity_pga('nonlinear'):.3g} m/s²"
+          + ("" if c.ec8 is None else f"; Eurocode 8 {'passes' if c.ec8.passed else 'fails'}, "
+             f"capacity {c.ec8.capacity_pga:.3g} m/s²"))
     for m in code.methods:
         p = (f"P(overturn | design) {m.probability.probability:.3f}" if m.probability
              else "no fit")

@@ -140,6 +140,11 @@ def summary_lines(result: CodeCheckResult) -> list[str]:
         else:
             lines.append("    non-linear not done: no finite kinematics")
     lines.append(f"  overall: {'pass' if result.passed else 'FAIL'}")
+    e = result.ec8
+    if e is not None:
+        lines.append(f"Eurocode 8 (EN 1998-1 §4.3.5.2): S_a = {e.coefficient:.3f} g, "
+                     f"γ_a = {e.importance:g}, q_a = {e.qa:g}: {'pass' if e.passed else 'FAIL'} "
+                     f" ratio {e.ratio:.3f}  capacity PGA {e.capacity_pga:.3f} m/s²")
     return lines
 
 
@@ -240,6 +245,18 @@ def _markdown(result: CodeCheckResult, command: str, figure: str) -> str:
     lines += ["## Mechanism and checks", ""]
     for d in result.directions:
         lines += _direction_section(d, g)
+    e = result.ec8
+    if e is not None:
+        lines += [
+            "## Eurocode 8, beside it", "",
+            f"EN 1998-1 §4.3.5.2 checks a non-structural element with a horizontal force "
+            f"F_a = S_a W_a γ_a / q_a [4.24]. For a rigid element (T_a = 0) at this site (type 1 "
+            f"soil factor of ground {site.soil} × S_T), S_a = {e.coefficient:.4g} g [4.25]; "
+            f"γ_a = {e.importance:g}, q_a = {e.qa:g} (Tab. 4.4: 1.0 for cantilevering "
+            f"parapets). The element resists up to α₀ = {e.alpha0:.4g} of its weight "
+            f"(limit analysis, the weaker direction): ratio α₀ q_a / (S_a γ_a) = "
+            f"{e.ratio:.3f}, **{'pass' if e.passed else 'FAIL'}**; design acceleration at "
+            f"the base {e.design_pga:.3f} m/s², capacity {e.capacity_pga:.3f} m/s².", ""]
     lines += [
         "## Assumptions",
         "",

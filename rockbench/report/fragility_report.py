@@ -376,7 +376,12 @@ def _code_section(result: FragilityResult, code: CodeBeside, number: int) -> Sec
         f"{site.confidence_factor:g}, {where}: design PGA at the element's base "
         f"{_pga(check.design_pga, g)} (level {code.design_level:.4g} of "
         f"{result.measure.label}). The " + "; ".join(parts)[4:] + ". Overall the element "
-        + ("passes." if check.passed else "fails.") + " `rockbench check` gives the whole check.")
+        + ("passes." if check.passed else "fails.") + " `rockbench check` gives the whole check."
+        + ("" if check.ec8 is None else
+           f" Eurocode 8's element check (EN 1998-1 §4.3.5.2, S_a = {check.ec8.coefficient:.3g} g, "
+           f"γ_a = {check.ec8.importance:g}, q_a = {check.ec8.qa:g}) "
+           f"{'passes' if check.ec8.passed else 'fails'} (ratio {check.ec8.ratio:.3f}, capacity "
+           f"PGA {_pga(check.ec8.capacity_pga, g)})."))
     ref = code.methods[0]
     if ref.probability is not None and math.isfinite(ref.nonlinear_margin):
         verdict = ("conservative" if ref.nonlinear_margin > 1 else "not conservative")
@@ -392,7 +397,8 @@ def _code_section(result: FragilityResult, code: CodeBeside, number: int) -> Sec
                        "margins: that median over each check's capacity PGA (above 1 the code "
                        "is conservative by that factor)."),
               columns=["method", "P(overturn | design)", f"P {conf}", "median overturning PGA",
-                       "median / linear capacity", "median / non-linear capacity"])
+                       "median / linear capacity", "median / non-linear capacity",
+                       "median / EC8 capacity"])
     for m in code.methods:
         p = m.probability
         kind = "ref" if m is ref else ""
@@ -400,7 +406,7 @@ def _code_section(result: FragilityResult, code: CodeBeside, number: int) -> Sec
                    Cell(f"{p.probability:.3f}", kind) if p else "–",
                    _interval(p.interval, "{:.3f}") if p else "–",
                    Cell(_pga(m.median_pga, g), kind), _num(m.linear_margin, "{:.2f}"),
-                   _num(m.nonlinear_margin, "{:.2f}")])
+                   _num(m.nonlinear_margin, "{:.2f}"), _num(m.ec8_margin, "{:.2f}")])
     sec.items.append(t)
     return sec
 

@@ -37,6 +37,13 @@ the masonry's modulus [C8.7.1.7], which rigid blocks do not have. At a height
 the base's acceleration is not taken below the ground's a_g S (the first-mode
 formula tends to 0 at the foot of the building, whose floor moves with the
 ground); the 2009 Circolare (C8A.4.2.3) required both checks.
+
+Beside it, :class:`Ec8Check` is Eurocode 8's force-based check of a non-structural element
+(EN 1998-1 §4.3.5.2, :mod:`rockbench.analytic.ec8_elements`): the element's design
+acceleration S_a γ_a / q_a against the collapse multiplier α_0 g of limit analysis (the
+same load pattern: a horizontal force proportional to each block's weight), with the
+site's a_g, its ground type's soil factor and topographic factor, and the building's
+z/H and T_1 (T_a = 0: a rigid element).
 """
 
 from __future__ import annotations
@@ -59,6 +66,7 @@ from rockbench.analytic.code_spectra import (
     floor_displacement_demand,
     simplified_floor_spectrum,
 )
+from rockbench.analytic.ec8_elements import element_coefficient, soil_factor
 from rockbench.analytic.kinematic import KinematicAnalysis, kinematic_analysis
 from rockbench.analytic.static_collapse import Flow, LimitResult, limit_analysis
 from rockbench.errors import ScenarioError
@@ -68,7 +76,7 @@ from rockbench.tomlfile import read_toml
 
 __all__ = ["CODES", "SLV_DAMPING", "DEFAULT_Q", "DEFAULT_FC", "SiteParameters", "CodeCheckInput",
            "load_site", "site_from_dict", "LinearCheck", "NonLinearCheck", "DirectionCheck",
-           "CodeCheckResult", "code_check", "Check"]
+           "CodeCheckResult", "Ec8Check", "code_check", "Check"]
 
 #: Codes the check implements.
 CODES = ("ntc2018",)
@@ -81,7 +89,8 @@ DEFAULT_FC = 1.35
 #: Periods sampled for the largest ground displacement demand on [0, T_SLV].
 _DEMAND_SAMPLES = 2001
 _TOP_KEYS = ("code", "ag", "F0", "TC_star", "soil", "topography", "q", "confidence_factor",
-             "building", "description")
+             "building", "description", "ec8")
+_EC8_KEYS = ("qa", "importance")
 _BUILDING_KEYS = ("height", "element_height", "period", "storeys", "damping", "floor_model")
 #: Which check: the linear (q) or the non-linear (displacement) one.
 Check = Literal["linear", "nonlinear"]
@@ -107,6 +116,9 @@ class SiteParameters:
         The building the element stands on (None: on the ground).
     floor_model : {"modal", "simplified"}
         Floor demand: first mode [C7.2.5]–[C7.2.8] or the simplified [C7.2.11].
+    ec8_qa, ec8_importance : float
+        q_a and γ_a of Eurocode 8's element check (``[ec8]`` ``qa``, ``importance``;
+        default 1.0 and 1.0: a cantilevering parapet of ordinary importance).
     code : str
         "ntc2018".
     description : str
@@ -129,6 +141,8 @@ class SiteParameters:
     confidence_factor: float = DEFAULT_FC
     building: Building | None = None
     floor_model: FloorModel = "modal"
+    ec8_qa: float = 1.0
+    ec8_importance: float = 1.0
     code: str = "ntc2018"
     description: str = ""
     source: str = ""
@@ -149,6 +163,10 @@ class SiteParameters:
                                 f"{checks.describe(self.floor_model)}")
         if self.building is not None and not isinstance(self.building, Building):
             raise ScenarioError("building must be a Building")
+        object.__setattr__(self, "ec8_qa", checks.number(self.ec8_qa, "ec8.qa", low=1.0,
+                                                         strict=False, high=5.0))
+        object.__setattr__(self, "ec8_importance", checks.number(
+            self.ec8_importance, "ec8.importance", low=0.5, high=3.0))
 
     @property
     def spectrum(self) -> SiteSpectrum:
@@ -205,7 +223,17 @@ class SiteParameters:
             d["building"] = {"height": b.height, "element_height": b.element_height,
                              "period": b.period, "storeys": b.storeys, "damping": b.damping,
                              "floor_model": self.floor_model}
+        d["ec8"] = {"qa": self.ec8_qa, "importance": self.ec8_importance}
         return d
+
+    def ec8_coefficient(self) -> float:
+        """S_a of EN 1998-1 [4.25] (g) of a rigid element (T_a = 0) at the element's base:
+        the site's a_g, the type 1 soil factor of its ground type times its S_T."""
+        soil = soil_factor(self.soil) * self.spectrum.ST
+        if self.building is None:
+            return element_coefficient(self.ag, soil)
+        b = self.building
+        return element_coefficient(self.ag, soil, b.element_height, b.height, 0.0, b.period)
 
 
 #: The brief's name for the same type.
@@ -241,11 +269,14 @@ def site_from_dict(data: Mapping[str, Any], source: str = "") -> SiteParameters:
         building = Building(raw["height"], raw["element_height"], raw["period"],
                             raw["storeys"], raw.get("damping", 5.0))
         floor_model = _text(raw, "floor_model", "modal", "building.")
+    ec8 = checks.table(data.get("ec8", {}), "ec8")
+    checks.no_unknown(ec8, _EC8_KEYS, "[ec8]")
     return SiteParameters(
         ag=data["ag"], F0=data["F0"], TC_star=data["TC_star"],
         soil=_text(data, "soil", "A"), topography=_text(data, "topography", "T1"),
         q=data.get("q", DEFAULT_Q), confidence_factor=data.get("confidence_factor", DEFAULT_FC),
         building=building, floor_model=cast(FloorModel, floor_model),
+        ec8_qa=ec8.get("qa", 1.0), ec8_importance=ec8.get("importance", 1.0),
         code=_text(data, "code", "ntc2018"), description=_text(data, "description", ""),
         source=source)
 
@@ -435,6 +466,49 @@ class DirectionCheck:
         return all(c.passed for c in (self.linear, self.nonlinear) if c is not None)
 
 
+@dataclass(frozen=True)
+class Ec8Check:
+    """Eurocode 8's check of a rigid non-structural element (EN 1998-1 §4.3.5.2).
+
+    Attributes
+    ----------
+    alpha0 : float
+        The smaller collapse multiplier of the two directions (limit analysis).
+    coefficient : float
+        S_a of [4.25] (g), T_a = 0.
+    qa, importance : float
+        q_a and γ_a.
+    g : float
+        Gravity (m/s²).
+    """
+
+    alpha0: float
+    coefficient: float
+    qa: float
+    importance: float
+    g: float
+
+    @property
+    def ratio(self) -> float:
+        """α_0 / (S_a γ_a / q_a): the overturning resistance over the design force."""
+        return self.alpha0 * self.qa / (self.coefficient * self.importance)
+
+    @property
+    def passed(self) -> bool:
+        """True if the resistance reaches the design force."""
+        return self.ratio >= 1.0
+
+    @property
+    def design_pga(self) -> float:
+        """S_a g (m/s²): the design acceleration of a rigid element at its base."""
+        return self.coefficient * self.g
+
+    @property
+    def capacity_pga(self) -> float:
+        """α_0 g q_a / γ_a (m/s²): the base acceleration at which the check is exactly met."""
+        return self.design_pga * self.ratio
+
+
 @dataclass(frozen=True, eq=False)
 class CodeCheckResult:
     """The code check of a scenario at a site (:func:`code_check`).
@@ -452,6 +526,8 @@ class CodeCheckResult:
         ground, a_Z(z) g ([C7.2.7], first mode; not below a_g S g) at a height.
     directions : tuple of DirectionCheck
         Loads toward +x, then −x.
+    ec8 : Ec8Check or None
+        Eurocode 8's element check (None when no direction has a collapse mechanism).
     """
 
     scenario: Scenario
@@ -459,6 +535,7 @@ class CodeCheckResult:
     friction: float
     design_pga: float
     directions: tuple[DirectionCheck, ...]
+    ec8: Ec8Check | None = None
 
     @property
     def passed(self) -> bool:
@@ -508,6 +585,10 @@ class CodeCheckResult:
             "capacity_ground_pga": {"linear": _num(self.capacity_ground_pga("linear")),
                                     "nonlinear": _num(self.capacity_ground_pga("nonlinear"))},
             "directions": [_direction_dict(d) for d in self.directions],
+            "ec8": None if self.ec8 is None else {
+                "clause": "EN 1998-1 §4.3.5.2", **dataclasses.asdict(self.ec8),
+                "ratio": self.ec8.ratio, "passed": self.ec8.passed,
+                "design_pga": self.ec8.design_pga, "capacity_pga": self.ec8.capacity_pga},
         }
         return out
 
@@ -623,4 +704,7 @@ def code_check(scenario: Scenario, site: SiteParameters, *,
                                                                  low=0.0, strict=False)
     design_pga = site.base_acceleration() * scenario.g
     dirs = tuple(_direction(scenario, site, d, design_pga, mu) for d in (1, -1))
-    return CodeCheckResult(scenario, site, mu, design_pga, dirs)
+    alphas = [d.limit.load_factor for d in dirs if d.limit.status == "collapse"]
+    ec8 = (Ec8Check(min(alphas), site.ec8_coefficient(), site.ec8_qa, site.ec8_importance,
+                    scenario.g) if alphas else None)
+    return CodeCheckResult(scenario, site, mu, design_pga, dirs, ec8)

@@ -63,6 +63,8 @@ class MethodAgainstCode:
     linear_margin, nonlinear_margin : float
         ``median_pga`` over the capacity PGA of the linear and non-linear checks (NaN where
         either is missing).
+    ec8_margin : float
+        ``median_pga`` over the capacity PGA of Eurocode 8's element check (NaN without it).
     """
 
     method: str
@@ -70,6 +72,7 @@ class MethodAgainstCode:
     median_pga: float
     linear_margin: float
     nonlinear_margin: float
+    ec8_margin: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -103,6 +106,7 @@ def code_beside(result: FragilityResult, check: CodeCheckResult) -> CodeBeside:
     per = _per_pga(result.measure, scenario)
     level = check.design_pga * per
     cap_lin, cap_non = check.capacity_pga("linear"), check.capacity_pga("nonlinear")
+    cap_ec8 = check.ec8.capacity_pga if check.ec8 is not None else math.nan
     rows = []
     for m in result.methods:
         boot = result.curve(m.label, LimitState.OVERTURNING).bootstrap
@@ -110,5 +114,5 @@ def code_beside(result: FragilityResult, check: CodeCheckResult) -> CodeBeside:
         median = boot.fit.median / per if boot is not None and ok else math.nan
         rows.append(MethodAgainstCode(
             m.label, boot.probability_at(level) if boot is not None and ok else None, median,
-            median / cap_lin, median / cap_non))
+            median / cap_lin, median / cap_non, median / cap_ec8))
     return CodeBeside(check, level, tuple(rows))
