@@ -3,6 +3,8 @@
 import re
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -123,3 +125,23 @@ def test_every_engine_has_a_docs_page():
     for ep in entry_points(group="rockbench.engines"):
         assert (pages / f"{ep.name}.md").is_file(), f"no docs/engines/{ep.name}.md"
         assert f"\n{ep.name}\n" in index, f"docs/engines/index.md does not list {ep.name}"
+
+
+@pytest.mark.fast
+def test_the_roof_parapet_example_files_load_and_its_code_numbers_hold():
+    from rockbench.scenarios import load_scenario
+    from rockbench.studies.code_check import code_check, load_site
+
+    folder = ROOT / "docs" / "studies" / "roof-parapet"
+    parapet = load_scenario(folder / "roof-parapet.toml")
+    roof = code_check(parapet, load_site(folder / "roof.toml"))
+    ground = code_check(parapet, load_site(folder / "ground.toml"))
+    text = (ROOT / "docs" / "studies" / "roof-parapet.md").read_text()
+    (lin, non) = (roof.directions[0].linear, roof.directions[0].nonlinear)
+    assert roof.ec8 is not None and lin is not None and non is not None
+    for number in (f"{roof.design_pga:.2f} m/s²", f"ratio {lin.ratio:.2f}",
+                   f"ratio {non.ratio:.2f}", f"ratio {roof.ec8.ratio:.2f}",
+                   f"capacity {non.capacity_pga:.2f} m/s²",
+                   f"ratio {ground.directions[0].linear.ratio:.2f}"):
+        assert number in text, number
+    assert not roof.passed and not ground.passed

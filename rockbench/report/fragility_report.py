@@ -58,6 +58,8 @@ CITATION = ("J. W. Baker, \u201cEfficient analytical fragility function fitting 
             "structural analysis\u201d, Earthquake Spectra 31(1), 579\u2013599 (2015), "
             "doi:10.1193/021113EQS025M")
 _DPI = 110
+#: Records beyond which the IDA figure names none in a legend.
+_IDA_LEGEND = 12
 
 
 def _num(v: float, fmt: str = "{:.3g}") -> str:
@@ -173,10 +175,14 @@ def ida_figure(path: Path, result: FragilityResult) -> Path:
         if k >= len(methods) - cols:
             ax.set_xlabel(result.measure.label, fontsize=8)
     handles, labels = first.get_legend_handles_labels() if first is not None else ([], [])
-    if handles:
+    if handles and len(labels) <= _IDA_LEGEND:
         fig.legend(handles, labels, fontsize=7, loc="lower center",
                    ncol=min(4, len(labels)), frameon=False)
-    fig.tight_layout(rect=(0.0, 0.06 + 0.02 * (len(labels) // 4), 1.0, 1.0))
+        fig.tight_layout(rect=(0.0, 0.06 + 0.02 * (len(labels) // 4), 1.0, 1.0))
+    else:  # a legend of dozens of records would cover the panels: runs.csv names them
+        fig.suptitle(f"one line per record ({len(names)}; colours repeat every 10)",
+                     fontsize=9)
+        fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=_DPI)
     return path
