@@ -282,7 +282,9 @@ def site_from_dict(data: Mapping[str, Any], source: str = "") -> SiteParameters:
 
 
 def load_site(path: str | Path) -> SiteParameters:
-    """Read a site file (TOML)::
+    """Read a site file (TOML).
+
+    A site file reads::
 
         code = "ntc2018"          # the only code implemented
         ag = 0.25                 # g, SLV return period, rigid ground
@@ -300,6 +302,10 @@ def load_site(path: str | Path) -> SiteParameters:
         storeys = 4               # N
         damping = 5.0             # xi_1 (%), optional
         floor_model = "modal"     # or "simplified" (Circolare [C7.2.11])
+
+        [ec8]                     # optional: Eurocode 8's element check
+        qa = 1.0                  # q_a (EN 1998-1 Tab. 4.4)
+        importance = 1.0          # gamma_a
 
     Raises
     ------
