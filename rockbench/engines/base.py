@@ -97,7 +97,7 @@ from rockbench.limits import check_memory
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["Engine", "Capabilities", "angles_from_quaternions", "install_hint",
+__all__ = ["Engine", "Capabilities", "angles_from_quaternions", "install_hint", "OVERTURN_MARGIN",
            "require_library"]
 
 
@@ -528,6 +528,13 @@ class Engine(ABC):
         """Free native resources after a run (rule 8)."""
 
 
+#: A block counts as overturned once |θ| ≥ π/2 − this (rad): a toppled block may settle on
+#: its side a hair short of π/2 (a float32 engine at π/2 − 2e-7), and no block that rocks
+#: comes back from there (it falls past its λ < π/2 long before).
+OVERTURN_MARGIN = 1e-3
+_R22_OVER = 0.5 * math.sin(OVERTURN_MARGIN)
+
+
 class _Watchdog:
     """Detects NaN, explosions, energy gain in free motion and overturning from poses.
 
@@ -596,7 +603,8 @@ class _Watchdog:
             # the orientation relative to the block's own at rest: q · rot_y(−θ_rest)
             c, s = np.cos(self.half_turn0), np.sin(self.half_turn0)
             w, qx, qy, qz = w * c + qy * s, qx * c + qz * s, qy * c - w * s, qz * c - qx * s
-        # θ = atan2(R02, R22) with both halved; |θ| ≥ π/2 exactly when R22 ≤ 0
+        # θ = atan2(R02, R22) with both halved (R22 = cos θ / 2 about y): overturned when
+        # |θ| ≥ π/2 − OVERTURN_MARGIN, i.e. R22 ≤ sin(margin)/2
         r22 = 0.5 - (qx * qx + qy * qy)
         theta = np.arctan2(qx * qz + w * qy, r22)
         dx, dz = x[1:] - x[:-1], z[1:] - z[:-1]
@@ -610,7 +618,7 @@ class _Watchdog:
         # (y enters no bound: a sum that NaN or infinity makes non-finite covers it)
         overlap = self.overlaps.first(poses[1:], t) if self.overlaps is not None else None
         if (move2.max() <= self.move2 and cos_turn.min() >= self.cos_turn
-                and r22.min() > 0.0 and far2.max() <= self.reach2
+                and r22.min() > _R22_OVER and far2.max() <= self.reach2
                 and (height is None or height.max() <= self.z_limit)
                 and math.isfinite(poses[1:, :, 1].sum())) and overlap is None:
             return None
@@ -618,7 +626,7 @@ class _Watchdog:
         finite = np.isfinite(poses[1:]).all(axis=(1, 2))
         far = (far2 > self.reach2).any(axis=1)
         fast = ((move2 > self.move2) | (cos_turn < self.cos_turn)).any(axis=1)
-        over = r22 <= 0.0
+        over = r22 <= _R22_OVER
         gain = height > self.z_limit if height is not None else np.zeros(len(t), bool)
         bad = ~finite | far | fast | over.any(axis=1) | gain
         if overlap is not None and not bad[:overlap[0] + 1].any():
