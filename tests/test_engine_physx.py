@@ -12,7 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from rockbench.engines.physx_engine import PhysxEngine, PhysxSettings, average_frictions
+from rockbench.engines.friction import mean_frictions
+from rockbench.engines.physx_engine import PhysxEngine, PhysxSettings
 from rockbench.errors import EngineUnavailable
 
 try:
@@ -108,23 +109,23 @@ def test_importing_the_library_does_not_warn() -> None:
         assert PhysxEngine.version()
 
 
-def test_average_frictions() -> None:
+def test_mean_frictions() -> None:
     """PhysX averages two materials' coefficients: every pair's mean is the scenario's."""
     column = stack((Block(0.2, 0.4, 0.6, mass=1.0), Block(0.2, 0.4, 0.6, mass=1.0),
                     Block(0.2, 0.4, 0.6, mass=1.0)))
-    assert average_frictions(column, 0.7, 0.7) == [0.7] * 4
-    mus = average_frictions(column, 0.7, 0.2)
+    assert mean_frictions(column, 0.7, 0.7) == [0.7] * 4
+    mus = mean_frictions(column, 0.7, 0.2)
     assert mus is not None and min(mus) >= 0.0
     assert 0.5 * (mus[0] + mus[1]) == pytest.approx(0.7)
     for a, b in zip(mus[1:], mus[2:], strict=False):
         assert 0.5 * (a + b) == pytest.approx(0.2)
-    mus = average_frictions(column, 0.3, 0.0)  # frictionless joints on a rough base
+    mus = mean_frictions(column, 0.3, 0.0)  # frictionless joints on a rough base
     assert mus == pytest.approx([0.6, 0.0, 0.0, 0.0])
     wall = get_scenario("wall-6x3").geometry
     assert wall.column is None
-    mus = average_frictions(wall, 0.6, 0.4)
+    mus = mean_frictions(wall, 0.6, 0.4)
     assert mus is not None and mus[0] == pytest.approx(0.8) and set(mus[1:]) == {0.4}
-    assert average_frictions(wall, 0.3, 1.0) is None  # would need a negative base value
+    assert mean_frictions(wall, 0.3, 1.0) is None  # would need a negative base value
 
 
 def test_an_assembly_whose_frictions_cannot_be_averaged_is_unsupported(

@@ -16,10 +16,10 @@ The base is a box whose top face is z = 0 and the fixed supports are more shapes
 it: static shapes in free rocking, otherwise shapes of a KINEMATIC body whose pose and
 velocity the plugin writes before every step (the base motion along x, y and z). No
 damping, no sleeping. Newton gives a contact the *mean* of its two shapes' friction
-coefficients (:func:`mean_frictions` chooses them so that each pair gets the
-scenario's μ or μ_if) and its torsional and rolling friction, which Newton enables by
-default (0.005 m and 1e-4 m: resistances Housner's block does not have), are off except in
-the ``game`` preset.
+coefficients (:func:`~rockbench.engines.friction.mean_frictions` chooses them so that
+each pair gets the scenario's μ or μ_if) and its torsional and rolling friction, which
+Newton enables by default (0.005 m and 1e-4 m: resistances Housner's block does not have),
+are off except in the ``game`` preset.
 
 Solvers (the ``solver`` knob; what each does on this problem is measured on the
 engine's page):
@@ -70,12 +70,13 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
+from rockbench.engines.friction import mean_frictions
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.geometry import Block, Geometry, Support, stack
+from rockbench.geometry import Block, Support, stack
 from rockbench.scenarios import Scenario, SinePulse
 
-__all__ = ["NewtonEngine", "NewtonSettings", "mean_frictions", "prism_mesh"]
+__all__ = ["NewtonEngine", "NewtonSettings", "prism_mesh"]
 
 Solver = Literal["xpbd", "steel", "semi_implicit", "featherstone", "vbd", "kamino"]
 #: Solvers that step joint coordinates (joint_q, joint_qd) rather than body poses.
@@ -201,44 +202,6 @@ class NewtonSettings(EngineSettings):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {value!r}")
-
-
-def mean_frictions(geometry: Geometry, mu: float, mu_if: float) -> list[float] | None:
-    """Per-shape friction coefficients whose pairwise *means* are μ (block–base or
-    support) and μ_if (block–block), as Newton combines them.
-
-    Parameters
-    ----------
-    geometry : Geometry
-        What is built.
-    mu : float
-        Friction between a block and the base or a support.
-    mu_if : float
-        Friction between two blocks.
-
-    Returns
-    -------
-    list of float or None
-        The base's (and supports') coefficient, then one per body; None when no
-        non-negative choice exists (a geometry whose blocks touch each other and the
-        base with μ_if > 2 μ).
-
-    Notes
-    -----
-    Equal coefficients: μ everywhere. A column (each block touches only the ones
-    below and above it): the base 2μ − a, the blocks alternating a and 2μ_if − a
-    with a = min(μ, μ_if). Any other geometry: μ_if on every block and 2μ − μ_if on
-    the base and supports.
-    """
-    n = geometry.n_bodies
-    if mu_if == mu:
-        return [mu] * (n + 1)
-    if geometry.column is not None:
-        a = min(mu, mu_if)
-        return [2.0 * mu - a] + [a if i % 2 == 0 else 2.0 * mu_if - a for i in range(n)]
-    if mu_if > 2.0 * mu:
-        return None
-    return [2.0 * mu - mu_if] + [mu_if] * n
 
 
 def prism_mesh(profile: np.ndarray, half_depth: float) -> tuple[np.ndarray, np.ndarray]:

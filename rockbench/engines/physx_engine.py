@@ -21,7 +21,8 @@ velocity). Base motion along x, y and z. No damping (PhysX's default angular
 damping is 0.05; ``angular_damping`` sets it), no sleeping (sleep threshold 0), no CCD
 unless asked. PhysX combines the coefficients of two materials by their AVERAGE and SAPIEN
 exposes no other combine mode, so each body gets coefficients whose pairwise means are the
-scenario's μ (μ_if between blocks) and restitution (:func:`average_frictions`).
+scenario's μ (μ_if between blocks) and restitution
+(:func:`~rockbench.engines.friction.mean_frictions`).
 
 Presets and knobs:
 
@@ -54,12 +55,13 @@ import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.bullet_engine import principal_frame
+from rockbench.engines.friction import mean_frictions
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.geometry import Block, Geometry, Support
+from rockbench.geometry import Block, Support
 from rockbench.scenarios import Scenario
 
-__all__ = ["PhysxEngine", "PhysxSettings", "average_frictions"]
+__all__ = ["PhysxEngine", "PhysxSettings"]
 
 #: Floats per rigid body in ``PhysxCpuSystem.pack()``: q (w, x, y, z), p, v, ω.
 _PACKED = 13
@@ -73,42 +75,6 @@ def _sapien() -> Any:
 def _physx() -> Any:
     """The ``sapien.physx`` submodule (PhysX's scene, bodies, shapes and materials)."""
     return PhysxEngine.library("sapien.physx")
-
-
-def average_frictions(geometry: Geometry, mu: float, mu_if: float) -> list[float] | None:
-    """Per-body coefficients whose pairwise means are μ (body–base or support) and μ_if.
-
-    PhysX's default combine mode averages the two materials' coefficients. Equal
-    coefficients: μ on every body. A column (each block touches only the ones below
-    and above it): the base 2μ − x, the blocks alternating x and 2μ_if − x with
-    x = min(μ, μ_if), so that none is negative. Any other geometry, whose blocks may
-    touch other blocks and the base at once: μ_if on every block and 2μ − μ_if on the
-    base and supports, which needs 2μ ≥ μ_if (else None: no coefficients exist).
-
-    Parameters
-    ----------
-    geometry : Geometry
-        What is built.
-    mu : float
-        Friction between a block and the base or a support.
-    mu_if : float
-        Friction between two blocks.
-
-    Returns
-    -------
-    list of float or None
-        The base's (and supports') coefficient, then one per body; None when no
-        non-negative coefficients give both means.
-    """
-    n = geometry.n_bodies
-    if mu_if == mu:
-        return [mu] * (n + 1)
-    if geometry.column is not None:
-        x = min(mu, mu_if)
-        return [2.0 * mu - x] + [x if i % 2 == 0 else 2.0 * mu_if - x for i in range(n)]
-    if 2.0 * mu < mu_if:
-        return None
-    return [2.0 * mu - mu_if] + [mu_if] * n
 
 
 @dataclass(frozen=True)
@@ -270,7 +236,7 @@ class PhysxEngine(Engine):
     # ------------------------------------------------------------------ hooks
     def _check_supported(self, scenario: Scenario) -> None:
         c = scenario.contact
-        if average_frictions(scenario.geometry, c.friction, c.block_friction) is None:
+        if mean_frictions(scenario.geometry, c.friction, c.block_friction) is None:
             raise UnsupportedScenario(
                 "physx averages the two bodies' friction coefficients: with the blocks "
                 f"touching each other and the base, an interface friction {c.block_friction} "
@@ -308,7 +274,7 @@ class PhysxEngine(Engine):
 
         geo = scenario.geometry
         c = scenario.contact
-        mus = average_frictions(geo, c.friction, c.block_friction)
+        mus = mean_frictions(geo, c.friction, c.block_friction)
         assert mus is not None  # _check_supported refused the other cases
         e = c.restitution
 
