@@ -15,22 +15,21 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-from rockbench.cli.common import check_output_path, command_line
+from rockbench.cli.common import (
+    BLOCK_DENSITY,
+    check_output_path,
+    command_line,
+    scenario_or_block,
+)
 from rockbench.errors import RockbenchError
 
-if TYPE_CHECKING:
-    from rockbench.scenarios import Scenario
-
-__all__ = ["COMMANDS", "BLOCK_DENSITY", "configure_check", "execute_check"]
+__all__ = ["COMMANDS", "configure_check", "execute_check"]
 
 #: The commands of this module: name → one-line help.
 COMMANDS = {"check": "NTC 2018 kinematic check (linear and non-linear) of a block or assembly "
                      "at a site"}
 
-#: Density of the --block shortcut (kg/m³, stone masonry; as ``rockbench fragility --block``).
-BLOCK_DENSITY = 2000.0
 
 
 def configure_check(p: argparse.ArgumentParser) -> None:
@@ -53,20 +52,6 @@ def configure_check(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", "-q", action="store_true", help="no summary on stdout")
 
 
-def _scenario(args: argparse.Namespace) -> Scenario:
-    from rockbench.scenarios import Block, Scenario, get_scenario, single
-
-    if args.scenario:
-        return get_scenario(args.scenario)
-    try:
-        width, height = (float(v) for v in args.block.split(","))
-    except ValueError:
-        raise RockbenchError(f"--block takes WIDTH,HEIGHT in m, got {args.block!r}") from None
-    block = Block(width, width, height, density=BLOCK_DENSITY)
-    return Scenario(f"block-{width:g}x{height:g}", single(block),
-                    description=f"block {width:g} m × {height:g} m, {BLOCK_DENSITY:g} kg/m³")
-
-
 def _friction(text: str | None) -> float | None:
     if text is None:
         return None
@@ -84,7 +69,7 @@ def execute_check(args: argparse.Namespace) -> int:
     from rockbench.report.code_check_report import summary_lines, write_code_check_report
     from rockbench.studies.code_check import code_check, load_site
 
-    scenario = _scenario(args)
+    scenario = scenario_or_block(args)
     site = load_site(args.site)
     friction = _friction(args.friction)
     out = Path(args.out)

@@ -302,3 +302,31 @@ class Progress:
     def __exit__(self, *exc: object) -> None:
         if self._bar is not None:
             self._bar.stop()
+
+
+# ---------------------------------------------------------------------- the element studied
+#: Density of the ``--block`` shortcut (kg/m³, stone masonry).
+BLOCK_DENSITY = 2000.0
+
+
+def scenario_or_block(args: argparse.Namespace) -> Any:
+    """The :class:`~rockbench.scenarios.Scenario` of ``--scenario NAME|FILE``, or of
+    ``--block WIDTH,HEIGHT``: one block of that width and height (m), square in plan, of
+    :data:`BLOCK_DENSITY` kg/m³.
+
+    Raises
+    ------
+    RockbenchError
+        ``--block`` that is not two numbers; a ScenarioError for a bad scenario.
+    """
+    from rockbench.scenarios import Block, Scenario, get_scenario, single
+
+    if args.scenario:
+        return get_scenario(args.scenario)
+    try:
+        width, height = (float(v) for v in args.block.split(","))
+    except ValueError:
+        raise RockbenchError(f"--block takes WIDTH,HEIGHT in m, got {args.block!r}") from None
+    block = Block(width, width, height, density=BLOCK_DENSITY)
+    return Scenario(f"block-{width:g}x{height:g}", single(block),
+                    description=f"block {width:g} m × {height:g} m, {BLOCK_DENSITY:g} kg/m³")

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rockbench.cli.common import (
+    BLOCK_DENSITY,
     Progress,
     add_engine_arguments,
     add_run_arguments,
@@ -22,6 +23,7 @@ from rockbench.cli.common import (
     command_line,
     engine_settings,
     execution_options,
+    scenario_or_block,
     selected_engines,
 )
 from rockbench.errors import RockbenchError
@@ -39,8 +41,6 @@ __all__ = ["COMMANDS", "configure_fragility", "execute_fragility"]
 COMMANDS = {"fragility": "overturning fragility of a block, stack or assembly over a record set "
                           "(IDA)"}
 
-#: Density of the --block shortcut (kg/m³, stone masonry).
-BLOCK_DENSITY = 2000.0
 
 
 def configure_fragility(p: argparse.ArgumentParser) -> None:
@@ -227,20 +227,6 @@ def _print_code(code: CodeBeside, g: float) -> None:
               f"{m.nonlinear_margin:.2f} × the non-linear capacity")
 
 
-def _scenario(args: argparse.Namespace) -> Scenario:
-    from rockbench.scenarios import Block, Scenario, get_scenario, single
-
-    if args.scenario:
-        return get_scenario(args.scenario)
-    try:
-        width, height = (float(v) for v in args.block.split(","))
-    except ValueError:
-        raise RockbenchError(f"--block takes WIDTH,HEIGHT in m, got {args.block!r}") from None
-    block = Block(width, width, height, density=BLOCK_DENSITY)
-    return Scenario(f"block-{width:g}x{height:g}", single(block),
-                    description=f"block {width:g} m × {height:g} m, {BLOCK_DENSITY:g} kg/m³")
-
-
 def execute_fragility(args: argparse.Namespace) -> int:
     """Run the study and write the report; 0 when the report is written."""
     from rockbench.method import REFERENCE
@@ -253,7 +239,7 @@ def execute_fragility(args: argparse.Namespace) -> int:
         set_records,
     )
 
-    scenario = _scenario(args)
+    scenario = scenario_or_block(args)
     levels = parse_levels(args.levels)
     names = ([n.strip() for n in args.records.split(",") if n.strip()]
              if args.records else None)
