@@ -20,7 +20,7 @@ from rockbench.engines import (
     resolve_engine_names,
     unregister,
 )
-from rockbench.engines.base import _Watchdog
+from rockbench.engines.base import Watchdog
 from rockbench.engines.drive import BaseDrive
 from rockbench.errors import EngineUnavailable, UnknownEngine
 from rockbench.geometry import Geometry, Support, stack
@@ -142,7 +142,7 @@ def test_overturning_nan_explosion_and_energy_gain_become_statuses(carry):
     assert 0.5 < rise.t[-1] < 0.55
 
 
-@pytest.mark.parametrize("at", [0.1, _Watchdog.PERIOD, _Watchdog.PERIOD + 0.01, 1.99])
+@pytest.mark.parametrize("at", [0.1, Watchdog.PERIOD, Watchdog.PERIOD + 0.01, 1.99])
 def test_watchdog_cuts_at_the_first_bad_sample_across_chunks(carry, at):
     # the watchdog checks chunks of PERIOD seconds of samples: a jump into the
     # first sample of a chunk is seen against the last sample of the one before
@@ -165,12 +165,12 @@ def test_watchdog_sees_nan_in_every_pose_component():
     poses[:, 0, 3], poses[:, 0, 5] = math.cos(th / 2), math.sin(th / 2)
     t = np.arange(1, 11) / 100.0
     drive = BaseDrive(sc.motion, sc.duration)
-    assert _Watchdog(sc, drive).check(poses, t) is None
+    assert Watchdog(sc, drive).check(poses, t) is None
     for col in range(7):
         bad = poses.copy()
         bad[4, 0, col] = np.nan
         with np.errstate(invalid="ignore"):
-            j, (status, msg) = _Watchdog(sc, drive).check(bad, t)
+            j, (status, msg) = Watchdog(sc, drive).check(bad, t)
         assert (j, status) == (3, Status.UNSTABLE) and "NaN" in msg, col
 
 
@@ -264,7 +264,7 @@ def test_the_watchdog_stops_a_run_where_unmodelled_bodies_overlap() -> None:
                   output_rate=10.0)
     rest = _poses([(-0.11, 0.4, 0.0), (0.21, 0.2, 0.0)])
     drive = BaseDrive(sc.motion, sc.duration)
-    watch = _Watchdog(sc, drive, ((0, 1), (1, 2), (0, 3)))
+    watch = Watchdog(sc, drive, ((0, 1), (1, 2), (0, 3)))
     chunk = np.repeat(rest[None], 5, axis=0)
     assert watch.check(chunk, np.arange(1, 5) * 0.1) is None
     # block 1 turned by 0.1 rad about its lower right corner reaches 2.1 cm into block 2
@@ -282,4 +282,4 @@ def test_the_watchdog_stops_a_run_where_unmodelled_bodies_overlap() -> None:
         found = watch.check(chunk, np.arange(1, 5) * 0.1)
         assert found is not None and f"{what} overlap by 0.01 m" in found[1][1], found
     # pairs the engine models are not watched
-    assert _Watchdog(sc, drive).check(chunk, np.arange(1, 5) * 0.1) is None
+    assert Watchdog(sc, drive).check(chunk, np.arange(1, 5) * 0.1) is None

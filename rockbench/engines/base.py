@@ -98,7 +98,7 @@ from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = ["Engine", "Capabilities", "angles_from_quaternions", "install_hint", "OVERTURN_MARGIN",
-           "require_library"]
+           "require_library", "trajectory_from_poses", "Watchdog"]
 
 
 def install_hint(extra: str, module: str) -> str:
@@ -386,22 +386,17 @@ class Engine(ABC):
         # steps; otherwise read every step and interpolate onto the output times
         aligned = k >= 1 and abs(ratio - k) <= 1e-6 * ratio
         drive = self.drive
-        watch = _Watchdog(scenario, drive, self.unmodelled_pairs(scenario))
+        watch = Watchdog(scenario, drive, self.unmodelled_pairs(scenario))
         poses = np.full((n_out, nb, 7), np.nan)
         poses[0] = self._read_poses()
         sampler = self._sample_aligned if aligned else self._sample_interpolated
         with np.errstate(invalid="ignore", over="ignore"):
             last, verdict = sampler(poses, t_out, dt, k, drive, watch)
-        status, message = verdict if verdict is not None else (Status.OK, "")
-        meta["settings"] = {**meta["settings"], "effective_timestep": dt,
-                            "steps_per_sample": ratio}
-        p = poses[:last]
-        theta, wobble = angles_from_quaternions(p[..., 3:])
-        return Trajectory(t=t_out[:last], theta=theta, x=p[..., 0], z=p[..., 2], wobble=wobble,
-                          status=status, message=message, **meta)
+        return trajectory_from_poses(poses[:last], t_out[:last], verdict, meta,
+                                     effective_timestep=dt, steps_per_sample=ratio)
 
     def _sample_aligned(self, poses: np.ndarray, t_out: np.ndarray, dt: float, k: int,
-                        drive: BaseDrive, watch: _Watchdog
+                        drive: BaseDrive, watch: Watchdog
                         ) -> tuple[int, tuple[Status, str] | None]:
         """Advance k steps per output sample, a watchdog chunk of samples per hook call."""
         n_out = t_out.size
@@ -428,7 +423,7 @@ class Engine(ABC):
         return n_out, None
 
     def _sample_interpolated(self, poses: np.ndarray, t_out: np.ndarray, dt: float, k: int,
-                             drive: BaseDrive, watch: _Watchdog
+                             drive: BaseDrive, watch: Watchdog
                              ) -> tuple[int, tuple[Status, str] | None]:
         """Step one at a time and interpolate poses linearly onto the output times."""
         n_out = t_out.size
@@ -528,6 +523,21 @@ class Engine(ABC):
         """Free native resources after a run (rule 8)."""
 
 
+def trajectory_from_poses(poses: np.ndarray, t: np.ndarray,
+                          verdict: tuple[Status, str] | None, meta: dict,
+                          **effective: Any) -> Trajectory:
+    """The :class:`Trajectory` of sampled poses (n, n_blocks, 7) at times ``t``.
+
+    ``verdict`` is the watchdog's (None: ``ok``); ``meta`` the run's engine, version,
+    settings and scenario; ``effective`` is added to its settings (the effective step).
+    """
+    status, message = verdict if verdict is not None else (Status.OK, "")
+    meta = {**meta, "settings": {**meta["settings"], **effective}}
+    theta, wobble = angles_from_quaternions(poses[..., 3:])
+    return Trajectory(t=t, theta=theta, x=poses[..., 0], z=poses[..., 2], wobble=wobble,
+                      status=status, message=message, **meta)
+
+
 #: A block counts as overturned once |θ| ≥ π/2 − this (rad): a toppled block may settle on
 #: its side a hair short of π/2 (a float32 engine at π/2 − 2e-7), and no block that rocks
 #: comes back from there (it falls past its λ < π/2 long before).
@@ -535,7 +545,7 @@ OVERTURN_MARGIN = 1e-3
 _R22_OVER = 0.5 * math.sin(OVERTURN_MARGIN)
 
 
-class _Watchdog:
+class Watchdog:
     """Detects NaN, explosions, energy gain in free motion and overturning from poses.
 
     Poses are checked in chunks of samples (vectorised, a fixed handful of NumPy
