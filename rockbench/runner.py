@@ -68,6 +68,7 @@ from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = ["Job", "ExecutionOptions", "ExecutionError", "TaskFault", "run_job", "run_jobs",
+           "run_batch", "plan_batches",
            "cost_hint", "map_tasks", "default_jobs", "run_job_subprocess", "dask_client",
            "EXECUTORS", "DEFAULT_TIMEOUT", "WORKER_HEADROOM_GB", "WorkerGroup", "limit_memory"]
 
@@ -87,7 +88,7 @@ class ExecutionError(RockbenchError, ValueError):
 
 
 def check_execution(jobs: Any, timeout: Any, executor: Any, scheduler: Any, *,
-                    flag: str = "", worker_memory: Any = None) -> None:
+                    flag: str = "", worker_memory: Any = None, batch: Any = 0) -> None:
     """The one validation of execution options (``flag="--"`` names them as options).
 
     Raises
@@ -95,8 +96,12 @@ def check_execution(jobs: Any, timeout: Any, executor: Any, scheduler: Any, *,
     ExecutionError
         ``jobs`` not an integer >= 1, ``timeout`` not a finite number > 0, an
         unknown executor, a scheduler without the Dask executor, or a
-        ``worker_memory`` that is not None or a number of GB > 0.
+        ``worker_memory`` that is not None or a number of GB > 0, a ``batch`` that is
+        not an integer >= 0.
     """
+    if isinstance(batch, bool) or not isinstance(batch, int) or batch < 0:
+        raise ExecutionError(f"{flag}batch must be an integer >= 0 (0: the engine's own "
+                             f"batch size, 1: one run at a time), got {batch!r}")
     if worker_memory is not None and (
             isinstance(worker_memory, bool) or not isinstance(worker_memory, (int, float))
             or math.isnan(worker_memory) or worker_memory <= 0):
@@ -142,6 +147,10 @@ class ExecutionOptions:
         (``RLIMIT_AS``); None (default): the per-run memory budget
         (:func:`rockbench.limits.memory_budget`) plus
         :data:`WORKER_HEADROOM_GB`, 8 GB by default; ``math.inf``: no limit.
+    batch : int
+        The most runs an engine that steps many worlds at once
+        (:class:`~rockbench.engines.batch.BatchEngine`) takes in one call: 0
+        (default) its own ``max_batch``, 1 one run at a time. Local executors only.
 
     Raises
     ------
@@ -156,10 +165,11 @@ class ExecutionOptions:
     isolate: bool = True
     warm: bool = True
     worker_memory: float | None = None
+    batch: int = 0
 
     def __post_init__(self) -> None:
         check_execution(self.jobs, self.timeout, self.executor, self.scheduler,
-                        worker_memory=self.worker_memory)
+                        worker_memory=self.worker_memory, batch=self.batch)
         object.__setattr__(self, "timeout", float(self.timeout))
 
     def worker_memory_bytes(self) -> float:
@@ -375,6 +385,46 @@ def run_jobs(
         specs = {name: _engine_spec(name) for name in {j.engine for j in jobs}}
         tasks: list[Any] = [(job, limit(job), specs[job.engine]) for job in jobs]
         return map_tasks(_subprocess_task, tasks, ex, on_done=done, on_fault=failed)
+    batches = plan_batches(jobs, ex.batch, ex.jobs)
+    if len(batches) == len(jobs):
+        return _run_singly(jobs, ex, done, failed, limit)
+    results: list[Any] = [None] * len(jobs)
+    broken: list[int] = []  # jobs of batches that crashed or timed out: rerun one by one
+
+    def batch_done(b: int, trajs: list[Trajectory] | None) -> None:
+        if trajs is None:
+            broken.extend(batches[b])
+            return
+        for i, traj in zip(batches[b], trajs, strict=True):
+            results[i] = traj
+            done(i, traj)
+
+    def batch_failed(b: int, fault: TaskFault) -> list[Trajectory] | None:
+        if len(batches[b]) == 1:
+            return [failed(batches[b][0], fault)]
+        return None
+
+    groups = {name: WorkerGroup(name, not ex.warm or _keeps_state(name))
+              for name in {j.engine for j in jobs}}
+    tasks = [[jobs[i] for i in b] for b in batches]
+    fn = _pool_batch if ex.isolate else run_batch
+    map_tasks(fn, tasks, ex, on_done=batch_done, on_fault=batch_failed,
+              timeout_of=lambda b: _batch_limit([limit(jobs[i]) for i in batches[b]]),
+              group_of=lambda b: groups[tasks[b][0].engine],
+              order=sorted(range(len(tasks)), key=lambda b: -sum(map(cost_hint, tasks[b]))))
+    if broken:
+        broken.sort()
+        again = _run_singly([jobs[i] for i in broken], ex, lambda k, t: done(broken[k], t),
+                            lambda k, f: failed(broken[k], f), lambda job: limit(job))
+        for i, traj in zip(broken, again, strict=True):
+            results[i] = traj
+    return results
+
+
+def _run_singly(jobs: list[Job], ex: ExecutionOptions, done: Callable[[int, Trajectory], None],
+                failed: Callable[[int, TaskFault], Trajectory],
+                limit: Callable[[Job], float | None]) -> list[Trajectory]:
+    """:func:`run_jobs` one run per task (the per-run path)."""
     if not ex.isolate:
         return map_tasks(run_job, jobs, ex, on_done=done)
     groups = {name: WorkerGroup(name, not ex.warm or _keeps_state(name))
@@ -385,6 +435,76 @@ def run_jobs(
     return map_tasks(_pool_job, jobs, ex, on_done=done, on_fault=failed,
                      timeout_of=lambda i: limit(jobs[i]), group_of=lambda i: groups[jobs[i].engine],
                      order=order)
+
+
+def _batch_limit(limits: list[float | None]) -> float | None:
+    """A batch's time limit: the sum of its runs' (None if any has none)."""
+    return None if any(x is None for x in limits) else float(sum(x for x in limits if x))
+
+
+def plan_batches(jobs: Sequence[Job], batch: int = 0, workers: int = 1) -> list[list[int]]:
+    """Group jobs into the batches :func:`run_jobs` dispatches (lists of job indices).
+
+    Jobs on an engine that steps many worlds at once
+    (:class:`~rockbench.engines.batch.BatchEngine`) with equal settings and
+    :func:`~rockbench.engines.batch.batch_key` go together, split evenly over
+    ``workers`` and at most ``batch`` (0: the engine's ``max_batch``) per batch; every
+    other job is a batch of its own. Batches keep the jobs' order.
+    """
+    from rockbench.engines.batch import batch_key, batch_size
+
+    together: dict[Any, list[int]] = {}
+    out: list[list[int]] = []
+    for i, job in enumerate(jobs):
+        try:
+            cap = batch_size(engine_class(job.engine)) if batch != 1 else 1
+            key = (job.engine, job.method, batch_key(job.scenario))
+            hash(key)
+        except (RockbenchError, TypeError):  # unknown engine, unhashable knob value
+            cap = 1
+        if cap <= 1:
+            out.append([i])
+        else:
+            together.setdefault(key, []).append(i)
+    for key, members in together.items():
+        cap = batch_size(engine_class(key[0])) if batch == 0 else batch
+        size = min(cap, max(1, math.ceil(len(members) / workers)))
+        out.extend(members[b:b + size] for b in range(0, len(members), size))
+    return sorted(out)
+
+
+def run_batch(jobs: Sequence[Job]) -> list[Trajectory]:
+    """Run jobs of one engine and settings in this process, batched where the engine can
+    (:func:`~rockbench.engines.batch.simulate_many`); as :func:`run_job` per result.
+
+    A library exception in a batch reruns its jobs one by one, so that only the run that
+    raises it is ``crashed``.
+
+    Raises
+    ------
+    RockbenchError
+        Bad input (unknown engine, bad settings).
+    """
+    from rockbench.engines.batch import simulate_many
+
+    if len(jobs) == 1:
+        return [run_job(jobs[0])]
+    engine = get_engine(jobs[0].engine)
+    try:
+        trajs = simulate_many(engine, [j.scenario for j in jobs], dict(jobs[0].settings))
+    except RockbenchError:
+        raise
+    except Exception:  # the library failed in one world or all: each run on its own says which
+        return [run_job(job) for job in jobs]
+    return [check_trajectory(t, j.scenario) for t, j in zip(trajs, jobs, strict=True)]
+
+
+def _pool_batch(jobs: list[Job]) -> list[Trajectory]:
+    """:func:`run_batch` in a pool child: bad input must unpickle in the parent."""
+    try:
+        return run_batch(jobs)
+    except RockbenchError as exc:
+        raise _portable(exc) from None
 
 
 def cost_hint(job: Job) -> float:

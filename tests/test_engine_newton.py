@@ -398,3 +398,45 @@ def test_other_solvers_rock_as_measured(solver: str, settings: dict, low: float,
     tr = NewtonEngine().simulate(sc, {"solver": solver, **settings})
     assert tr.status is Status.OK, tr.message
     assert low <= max_error(sc, tr.theta[:, 0]) <= high
+
+
+# ---------------------------------------------------------------- batched worlds
+def _same(a: object, b: object) -> bool:
+    return (a.status == b.status and a.message == b.message  # type: ignore[attr-defined]
+            and np.array_equal(a.theta, b.theta) and np.array_equal(a.x, b.x)  # type: ignore[attr-defined]
+            and np.array_equal(a.z, b.z))  # type: ignore[attr-defined]
+
+
+def _sweep(duration: float = 2.0) -> list[Scenario]:
+    """Single #2 under 3 Hz pulses from rocking to overturning, a stack and free rocking:
+    worlds of several geometries, moving and still bases, and both outcomes."""
+    pulse = get_scenario("single-pulse-3.0hz-8mm").replace(duration=duration)
+    return [*(pulse.replace(name=f"a{a}", excitation=SinePulse(3.0, a * 1e-3))
+              for a in (5, 11, 20)),
+            get_scenario("stack-pulse-4.0hz-4mm").replace(duration=duration),
+            free_b2(duration)]
+
+
+@pytest.mark.slow
+def test_a_batch_of_worlds_equals_the_runs_alone(engine: NewtonEngine) -> None:
+    scs = _sweep()
+    alone = [engine.simulate(sc, "fast") for sc in scs]
+    many = engine.simulate_many(scs, "fast")
+    assert Status.OVERTURNED in {t.status for t in alone}  # a20 overturns
+    for a, b in zip(alone, many, strict=True):
+        assert _same(a, b), a.scenario  # bit for bit: no contact between worlds
+        assert b.settings["batch_worlds"] == len(scs)
+    # the batch's CPU time is shared among its worlds and is a fraction of the runs'
+    assert sum(t.cpu_time for t in many) < sum(t.cpu_time for t in alone)
+
+
+@pytest.mark.slow
+def test_run_jobs_batches_newton_with_the_same_results() -> None:
+    from rockbench.runner import ExecutionOptions, Job, run_jobs
+
+    jobs = [Job(sc, "newton", {"preset": "fast"}) for sc in _sweep(1.0)]
+    batched = run_jobs(jobs, ExecutionOptions(jobs=2))
+    single = run_jobs(jobs, ExecutionOptions(jobs=2, batch=1))
+    for a, b in zip(single, batched, strict=True):
+        assert _same(a, b), a.scenario
+    assert {b.settings.get("batch_worlds") for b in batched} <= {2, 3}

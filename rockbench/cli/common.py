@@ -170,13 +170,16 @@ def add_parallel_arguments(p: argparse.ArgumentParser, *, timeout: float | None 
 
 
 def add_worker_arguments(p: argparse.ArgumentParser) -> None:
-    """``--no-warm`` and ``--worker-memory``: how isolated engine workers are kept."""
+    """``--no-warm``, ``--worker-memory`` and ``--batch``: how engine workers are kept."""
     p.add_argument("--no-warm", action="store_true",
                    help="a fresh process for every run instead of warm workers that import "
                         "an engine once (a crash or hang still costs only its run either way)")
     p.add_argument("--worker-memory", type=float, default=None, metavar="GB",
                    help="address-space limit of each engine worker (default: the run budget "
                         "+ 6 GB); a run past it ends as that run's failure")
+    p.add_argument("--batch", type=int, default=0, metavar="N",
+                   help="runs an engine that steps many worlds at once (newton) takes per "
+                        "call: 0 (default) its own batch size, 1 one run at a time")
 
 
 def check_parallel_arguments(args: argparse.Namespace) -> None:
@@ -192,7 +195,7 @@ def check_parallel_arguments(args: argparse.Namespace) -> None:
     check_execution(default_jobs() if jobs is None else jobs,
                     DEFAULT_TIMEOUT if timeout is None else timeout,
                     getattr(args, "executor", "process"), getattr(args, "scheduler", None),
-                    flag="--")
+                    flag="--", batch=getattr(args, "batch", 0))
 
 
 def execution_options(args: argparse.Namespace, *, isolate: bool = True) -> Any:
@@ -214,7 +217,8 @@ def execution_options(args: argparse.Namespace, *, isolate: bool = True) -> Any:
                             timeout=DEFAULT_TIMEOUT if timeout is None else timeout,
                             executor=getattr(args, "executor", "process"),
                             scheduler=getattr(args, "scheduler", None) or None,
-                            isolate=isolate, warm=not getattr(args, "no_warm", False), **extra)
+                            isolate=isolate, warm=not getattr(args, "no_warm", False),
+                            batch=getattr(args, "batch", 0), **extra)
 
 
 def store_path(args: argparse.Namespace) -> Path | None:

@@ -69,7 +69,9 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
-from rockbench.engines.base import Capabilities, Engine
+from rockbench.engines.base import Capabilities
+from rockbench.engines.batch import BatchEngine
+from rockbench.engines.drive import BaseDrive
 from rockbench.engines.friction import mean_frictions
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
@@ -239,7 +241,7 @@ def prism_mesh(profile: np.ndarray, half_depth: float) -> tuple[np.ndarray, np.n
     return np.vstack([front, back]), np.asarray(tris, dtype=np.int32).ravel()
 
 
-class NewtonEngine(Engine):
+class NewtonEngine(BatchEngine):
     """Newton (NVIDIA Warp, float32) on the CPU device, one model per simulation."""
 
     name: ClassVar[str] = "newton"
@@ -286,16 +288,17 @@ class NewtonEngine(Engine):
         self._states: list[Any] = []
         self._graphs: dict[tuple[int, int], Any] = {}
         self._cur = 0
-        self._n = 0
-        self._first = 0  # index of the first block's body (the base's is 0 when it moves)
+        super().__init__()
+        # per world: the base's body, its free joint's first coordinates (-1: none)
+        self._bases = np.zeros(0, int)
+        self._base_q = np.zeros(0, int)
+        self._base_qd = np.zeros(0, int)
+        self._rows = np.zeros(0, int)  # the blocks' bodies, world after world
+        self._splits = np.zeros(0, int)
         self._dt = 0.0
         self._s: NewtonSettings = NewtonSettings()
         self._poses = np.zeros((0, 7))
         self._views: list[dict[str, np.ndarray]] = []
-        # the base's displacement at each step start and its secant velocity over it
-        self._u = np.zeros((0, 3))
-        self._v = np.zeros((0, 3))
-        self._u_end = np.zeros(3)
 
     @classmethod
     def version(cls) -> str:
@@ -339,29 +342,76 @@ class NewtonEngine(Engine):
                 "and the base (not a column)")
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
+        # one run is a batch of one world: both paths build and step the same model
+        self.drives = [self.drive]
+        return self._build_batch([scenario], settings)
+
+    def _build_batch(self, scenarios: list[Scenario], settings: EngineSettings) -> float:
         assert isinstance(settings, NewtonSettings)  # resolve_settings made it one
         s = self._s = settings
-        if s.planar and "y" in self.drive.axes:
+        if s.planar and any("y" in d.axes for d in self.drives):
             # settings are not visible to _check_supported, hence here
             raise UnsupportedScenario(
                 "newton: planar=True joins each block to the base along y, so a base motion "
                 "along y would carry the blocks rigidly; run it with planar=false")
         wp, newton = _libs()
-        out_dt = 1.0 / scenario.output_rate
+        out_dt = 1.0 / scenarios[0].output_rate
         # a whole number of steps per output interval lets samples be taken after whole
         # steps; a step longer than the interval is refused by the base loop
         dt = out_dt / max(1, round(out_dt / s.timestep)) if s.timestep <= out_dt * (1 + 1e-9) \
             else s.timestep
         self._dt = dt
-        drive = self.drive
+        builder = newton.ModelBuilder(up_axis="Z", gravity=(0.0, 0.0, -scenarios[0].g))
+        builder.rigid_gap = s.gap
+        bases, base_joints, firsts = [], [], []
+        for sc, drive in zip(scenarios, self.drives, strict=True):
+            # a world per scenario: Newton collides no shape with another world's
+            builder.begin_world(gravity=(0.0, 0.0, -sc.g))
+            base, joint, first = self._add_world(newton, wp, builder, sc, drive, s)
+            builder.end_world()
+            bases.append(base)
+            base_joints.append(joint)
+            firsts.append(first)
+        if s.solver == "vbd":
+            builder.color()
+        self._model = model = builder.finalize(device="cpu")
+        self._solver = self._make_solver(newton, model, s,
+                                         max(sc.contact.restitution for sc in scenarios))
+        self._states = [model.state(), model.state()]
+        if s.solver in _JOINT_SPACE:
+            for st in self._states:
+                newton.eval_fk(model, st.joint_q, st.joint_qd, st)
+        self._pipeline = newton.CollisionPipeline(model, broad_phase="explicit")
+        self._contacts = self._pipeline.contacts()
+        self._control = model.control()
+        self._cur = 0
+        self._graphs = {}
+        # CPU arrays: numpy() is a view of the same memory, written and read in place
+        self._views = [{"body_q": st.body_q.numpy(), "body_qd": st.body_qd.numpy(),
+                        "joint_q": st.joint_q.numpy(), "joint_qd": st.joint_qd.numpy()}
+                       for st in self._states]
+        self._bases = np.asarray(bases, int)
+        q_start, qd_start = model.joint_q_start.numpy(), model.joint_qd_start.numpy()
+        self._base_q = np.asarray([q_start[j] if j >= 0 else -1 for j in base_joints], int)
+        self._base_qd = np.asarray([qd_start[j] if j >= 0 else -1 for j in base_joints], int)
+        self._rows = np.concatenate([np.arange(f, f + sc.n_blocks)
+                                     for f, sc in zip(firsts, scenarios, strict=True)])
+        self._splits = np.cumsum([sc.n_blocks for sc in scenarios])[:-1]
+        self._poses = np.zeros((len(self._rows), 7))
+        return dt
+
+    def _add_world(self, newton: Any, wp: Any, builder: Any, scenario: Scenario,
+                   drive: BaseDrive, s: NewtonSettings) -> tuple[int, int, int]:
+        """Add ``scenario``'s base, supports and blocks to the builder's current world.
+
+        Returns the base's body (-1: static shapes) and free joint (-1: none), and the
+        first block's body.
+        """
         geo = scenario.geometry
         blocks = scenario.blocks
         c = scenario.contact
         mus = mean_frictions(geo, c.friction, c.block_friction)
         assert mus is not None  # _check_supported refused the others
-
-        builder = newton.ModelBuilder(up_axis="Z", gravity=(0.0, 0.0, -scenario.g))
-        builder.rigid_gap = s.gap
 
         def shape_cfg(mu: float) -> Any:
             # no density: the bodies' mass and inertia are set explicitly
@@ -377,7 +427,7 @@ class NewtonEngine(Engine):
         hx = max(1.0, 2.0 * reach)
         hy = max(1.0, 2.0 * reach, depth)
         hz = max(0.5, 0.5 * geo.total_height)
-        base = -1  # static shapes in free rocking
+        base = base_joint = -1  # static shapes in free rocking
         joints = []
         if drive.moving:
             mass = _BASE_MASS_RATIO * float(sum(b.m for b in blocks))
@@ -386,7 +436,8 @@ class NewtonEngine(Engine):
                                     inertia=wp.mat33(inertia, 0.0, 0.0, 0.0, inertia, 0.0,
                                                      0.0, 0.0, inertia),
                                     lock_inertia=True, is_kinematic=True, label="base")
-            joints.append(builder.add_joint_free(child=base, label="base_free"))
+            base_joint = builder.add_joint_free(child=base, label="base_free")
+            joints.append(base_joint)
         base_cfg = shape_cfg(mus[0])
         builder.add_shape_box(base, xform=wp.transform(wp.vec3(0.0, 0.0, -hz),
                                                        wp.quat_identity()),
@@ -397,8 +448,7 @@ class NewtonEngine(Engine):
             builder.add_articulation(joints, label="base")
             joints = []
 
-        self._n = n = len(blocks)
-        self._first = 1 if drive.moving else 0
+        first = builder.body_count
         dof = newton.ModelBuilder.JointDofConfig
         for i, (blk, (cx, cz, th)) in enumerate(zip(blocks, scenario.initial_poses(),
                                                    strict=True)):
@@ -428,31 +478,7 @@ class NewtonEngine(Engine):
                 builder.add_shape_convex_hull(body, mesh=mesh, cfg=cfg)
         if joints:
             builder.add_articulation(joints, label="blocks")
-        if s.solver == "vbd":
-            builder.color()
-        self._model = model = builder.finalize(device="cpu")
-        self._solver = self._make_solver(newton, model, s, c.restitution)
-        self._states = [model.state(), model.state()]
-        if s.solver in _JOINT_SPACE:
-            for st in self._states:
-                newton.eval_fk(model, st.joint_q, st.joint_qd, st)
-        self._pipeline = newton.CollisionPipeline(model, broad_phase="explicit")
-        self._contacts = self._pipeline.contacts()
-        self._control = model.control()
-        self._cur = 0
-        self._graphs = {}
-        # CPU arrays: numpy() is a view of the same memory, written and read in place
-        self._views = [{"body_q": st.body_q.numpy(), "body_qd": st.body_qd.numpy(),
-                        "joint_q": st.joint_q.numpy(), "joint_qd": st.joint_qd.numpy()}
-                       for st in self._states]
-        self._poses = np.zeros((n, 7))
-        if drive.moving:
-            m = drive.steps_until_stop(dt) + int(math.ceil(out_dt / dt)) + 2
-            u = drive.displacement(drive.grid(dt, m + 1))
-            self._u = u[:-1]
-            self._v = np.diff(u, axis=0) / dt
-            self._u_end = np.asarray(drive.final_displacement(), float)
-        return dt
+        return base, base_joint, first
 
     @staticmethod
     def _add_support(newton: Any, wp: Any, builder: Any, base: int, sup: Support, depth: float,
@@ -534,37 +560,18 @@ class NewtonEngine(Engine):
             self._eager(self._cur, n)
         self._cur = (self._cur + n) % 2
 
-    def _set_base(self, u: np.ndarray, v: np.ndarray) -> None:
-        """Write the base's pose (translation ``u``, no rotation) and velocity ``v`` into
-        the current state (and its free joint's coordinates for the joint-space solvers)."""
-        # the base is body 0 and its free joint the first one
+    def _drive_worlds(self, worlds: list[int], u: np.ndarray, v: np.ndarray) -> None:
+        # the base bodies' poses and velocities in the current state, and their free
+        # joints' coordinates for the joint-space solvers
         view = self._views[self._cur]
-        view["body_q"][0, :3] = u
-        view["body_qd"][0, :3] = v
+        bodies = self._bases[worlds]
+        view["body_q"][bodies, :3] = u
+        view["body_qd"][bodies, :3] = v
         if self._s.solver in _JOINT_SPACE:
-            view["joint_q"][:3] = u
-            view["joint_qd"][:3] = v
-
-    def _drive_base(self, t: float, dt: float) -> None:
-        i = int(round(t / self._dt))
-        if i < len(self._v):
-            self._set_base(self._u[i], self._v[i])
-        else:  # beyond the precomputed window (should not happen): hold still
-            self._set_base(self._u_end, np.zeros(3))
-
-    def _advance_driven(self, t0: float, n: int, dt: float) -> None:
-        # one-step graphs with the base's pose and velocity written in between
-        i0 = int(round(t0 / self._dt))
-        if i0 + n > len(self._v):  # past the precomputed window (should not happen)
-            super()._advance_driven(t0, n, dt)
-            return
-        for u, v in zip(self._u[i0:i0 + n], self._v[i0:i0 + n], strict=True):
-            self._set_base(u, v)
-            self._steps(1)
-
-    def _fix_base(self) -> bool:
-        self._set_base(self._u_end, np.zeros(3))
-        return True
+            q0, qd0 = self._base_q[worlds], self._base_qd[worlds]
+            for a in range(3):
+                view["joint_q"][q0 + a] = u[:, a]
+                view["joint_qd"][qd0 + a] = v[:, a]
 
     def _advance(self, n: int) -> None:
         self._steps(n)
@@ -575,7 +582,11 @@ class NewtonEngine(Engine):
             row[...] = self._read_poses()
 
     def _read_poses(self) -> np.ndarray:
-        q = self._views[self._cur]["body_q"][self._first:self._first + self._n]
+        return self._read_all()
+
+    def _read_all(self) -> np.ndarray:
+        """Every world's block poses, world after world, (x, y, z, qw, qx, qy, qz)."""
+        q = self._views[self._cur]["body_q"][self._rows]
         out = self._poses
         out[:, :3] = q[:, :3]
         # Warp's quaternions are (x, y, z, w)
@@ -583,8 +594,13 @@ class NewtonEngine(Engine):
         out[:, 4:] = q[:, 3:6]
         return out
 
+    def _read_batch(self) -> list[np.ndarray]:
+        return np.split(self._read_all(), self._splits)
+
+    def _advance_batch(self, n: int) -> None:
+        self._steps(n)
+
     def _teardown(self) -> None:
         self._model = self._solver = None
-        self._states, self._views, self._graphs = [], [], {}
+        self._states, self._views, self._graphs, self.drives = [], [], {}, []
         self._pipeline = self._contacts = self._control = None
-        self._u = self._v = np.zeros((0, 3))
