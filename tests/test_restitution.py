@@ -13,10 +13,11 @@ from rockbench.analytic.overturning import housner_eta
 from rockbench.analytic.restitution import effective_restitution, half_cycle_peaks
 from rockbench.cli import main
 from rockbench.errors import RockbenchError
+from rockbench.method import Method
 from rockbench.report.restitution_report import write_report
 from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import get_scenario
-from rockbench.studies.restitution import RestitutionOptions, run_restitution
+from rockbench.studies.restitution import RestitutionOptions, run_restitution, sampled_for
 
 
 @pytest.mark.fast
@@ -77,6 +78,23 @@ def test_the_study_reads_housners_eta_off_the_analytic_model_and_an_engine(tmp_p
     assert (tmp_path / "figures" / "restitution.png").stat().st_size > 20_000
     assert "η measured" in (tmp_path / "report.md").read_text()
     assert files[0].name == "index.html"
+
+
+def test_a_step_longer_than_the_output_interval_is_sampled_once_per_step():
+    pytest.importorskip("pymunk")
+    sc = get_scenario("free-b2-0.5")
+    assert sc.output_rate == 1000.0
+    sixty = {"timestep": 1.0 / 60.0}
+    assert sampled_for(sc, Method.of("pymunk", sixty)).output_rate == pytest.approx(60.0)
+    assert sampled_for(sc, Method.of("pymunk", {"preset": "fast"})) is sc
+    assert sampled_for(sc, Method.reference()) is sc
+    # a game-like 60 Hz step runs, and its η is read off one sample per step
+    res = run_restitution(RestitutionOptions(
+        scenarios=[sc], engines=["pymunk"], presets=["accurate"], overrides={"pymunk": sixty},
+        impacts=3, execution=ExecutionOptions(isolate=False)))
+    row = res.row("pymunk[accurate]", "free-b2-0.5")
+    assert row.status == "ok" and row.impacts is not None and len(row.impacts.eta) >= 2
+    assert 0.5 < row.ratio < 1.05
 
 
 @pytest.mark.fast
