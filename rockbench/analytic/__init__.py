@@ -20,6 +20,13 @@ from rockbench.analytic.overturning import (
     pulse_outcome,
     scan_column,
 )
+from rockbench.analytic.rolling_cylinder import (
+    RollingOutcome,
+    RollingSolution,
+    SteadyPrecession,
+    solve_rolling,
+    steady_precession,
+)
 from rockbench.analytic.sliding import (
     Regime,
     RegimeThresholds,
@@ -61,6 +68,8 @@ __all__ = [
     "regime_thresholds", "onset_regime",
     "limit_analysis", "stands", "minimum_stable", "LimitResult", "BlockMotion",
     "InterfaceMotion", "InterfaceForce", "critical_angle", "uplift_ratio", "coverage",
+    "solve_rolling", "steady_precession", "RollingSolution", "RollingOutcome",
+    "SteadyPrecession",
 ]
 
 
