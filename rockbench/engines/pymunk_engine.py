@@ -34,7 +34,6 @@ calibration, measured accuracy and cost.
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 import math
 from dataclasses import dataclass
@@ -44,31 +43,12 @@ import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.friction import product_frictions
+from rockbench.engines.planar import refuse_out_of_plane
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.geometry import Block, Geometry, Prism, Support
 from rockbench.scenarios import Scenario
 
 __all__ = ["PymunkEngine", "PymunkSettings"]
-
-# Fields of the geometry model known to be planar (x–z) or to act only through mass and
-# inertia; anything else a (sub)class adds is refused when set (see _check_supported)
-_PLANAR_FIELDS: dict[type, frozenset[str]] = {
-    Block: frozenset({"width", "depth", "height", "density", "mass", "chamfer"}),
-    Prism: frozenset({"vertices", "depth", "density", "mass", "centre_of_gravity",
-                      "_centroid", "_area", "_moments"}),
-    Support: frozenset({"vertices"}),
-    Geometry: frozenset({"bodies", "poses", "supports", "base", "_centroids", "_interfaces"}),
-}
-
-
-def _is_set(value: Any) -> bool:
-    """True for a field value that differs from an empty/zero default."""
-    try:
-        return bool(np.any(np.asarray(value, dtype=float) != 0.0))
-    except (TypeError, ValueError):
-        return bool(value)
-
 
 def _pymunk() -> Any:
     """The pymunk module, imported on first use (rule 2 of the engine contract)."""
@@ -197,15 +177,7 @@ class PymunkEngine(Engine):
                 "pymunk multiplies two shapes' frictions, so an interface friction of 0 "
                 f"with μ = {c.friction:g} on the base cannot both hold in this geometry, "
                 "whose blocks may touch each other and the base at once")
-        for obj in (geo, *geo.bodies, *geo.supports):
-            known = next((v for k, v in _PLANAR_FIELDS.items() if isinstance(obj, k)),
-                         frozenset())
-            for f in dataclasses.fields(obj):
-                if f.name not in known and _is_set(getattr(obj, f.name)):
-                    raise UnsupportedScenario(
-                        f"pymunk is a 2D engine (x–z plane); {type(obj).__name__}.{f.name} "
-                        f"may describe out-of-plane content, which it cannot model"
-                    )
+        refuse_out_of_plane(self.name, geo)
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
         pymunk = _pymunk()
