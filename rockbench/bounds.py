@@ -193,4 +193,5 @@ def _check_physical(traj: Trajectory, scenario: Scenario) -> Trajectory:
 def _cut(traj: Trajectory, i: int, status: Status, message: str) -> Trajectory:
     n = i + 1
     return replace(traj, t=traj.t[:n], theta=traj.theta[:n], x=traj.x[:n], z=traj.z[:n],
-                   wobble=traj.wobble[:n], status=status, message=message)
+                   wobble=traj.wobble[:n], y=traj.y[:n], roll=traj.roll[:n],
+                   twist=traj.twist[:n], status=status, message=message)

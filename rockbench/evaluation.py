@@ -25,7 +25,8 @@ computed anywhere else. Definitions (angles normalised by the scenario's λ):
   samples the run produced, not the duration requested).
 * ``slide``: the bottom block's largest departure from rigid rocking
   kinematics (sliding or contact drift, m); ``max_wobble``: largest out-of-plane
-  rotation (rad).
+  rotation (rad); ``max_roll`` and ``max_twist``: largest |rotation about +x| and about the
+  block's own vertical axis (rad; 0 for planar methods).
 * ``interface_slip``, ``interface_gap``: the largest departure of the upper
   blocks from rigid no-slip rocking on the block below (:func:`interface_motion`,
   m; None for a single block): tangential (slip along the lower block's top
@@ -198,6 +199,8 @@ class RunMetrics:
     max_error_early: float | None = None
     peak_errors: tuple[float | None, ...] = ()
     peak_error: float | None = None
+    max_roll: float | None = None
+    max_twist: float | None = None
     impact_time_errors: tuple[float | None, ...] = ()
     impact_time_error: float | None = None
     impacts_missing: int | None = None
@@ -318,7 +321,8 @@ _REQUIRED = {f.name for f in fields(RunMetrics)
 NUMERIC_METRICS = frozenset({
     "max_error", "max_error_early", "peak_error", "impact_time_error", "impacts_missing",
     "time_to_rest", "reference_time_to_rest", "wall_time", "cpu_time", "realtime_factor",
-    "slide", "max_wobble", "simulated_time", "interface_slip", "interface_gap",
+    "slide", "max_wobble", "max_roll", "max_twist", "simulated_time", "interface_slip",
+    "interface_gap",
 })
 
 
@@ -360,6 +364,8 @@ def evaluate_run(scenario: Scenario, traj: Trajectory, reference: Trajectory | N
         realtime_factor=simulated / wall if wall > 0 and simulated > 0 else None,
         time_to_rest=finite_or_none(metrics.time_to_rest(traj, lam)) if n else None,
         max_wobble=finite_or_none(np.max(np.abs(traj.wobble))) if n else None,
+        max_roll=finite_or_none(np.max(np.abs(traj.roll))) if n else None,
+        max_twist=finite_or_none(np.max(np.abs(traj.twist))) if n else None,
         slide=sliding(traj, scenario),
         interface_slip=slip, interface_gap=gap,
         engine_version=engine_version or traj.engine_version, settings_hash=settings_hash,

@@ -496,7 +496,8 @@ class Store:
             arrays = {k: f[k] for k in f.files}
         return Trajectory(
             t=arrays["t"], theta=arrays["theta"], x=arrays["x"], z=arrays["z"],
-            wobble=arrays["wobble"], impacts=arrays.get("impacts"),
+            wobble=arrays["wobble"], y=arrays.get("y"), roll=arrays.get("roll"),
+            twist=arrays.get("twist"), impacts=arrays.get("impacts"),
             status=Status(meta["status"]), message=meta["message"],
             wall_time=meta["wall_time"], engine=meta["engine"],
             engine_version=meta["engine_version"], settings=meta["settings"],
@@ -508,8 +509,7 @@ class Store:
         if not traj.status.completed:
             return
         buf = io.BytesIO()
-        arrays = {"t": traj.t, "theta": traj.theta, "x": traj.x, "z": traj.z,
-                  "wobble": traj.wobble}
+        arrays = traj.arrays()
         if traj.impacts is not None:
             arrays["impacts"] = traj.impacts
         write_npz(buf, arrays)

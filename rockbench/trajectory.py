@@ -22,10 +22,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["Status", "Trajectory", "QUANTITIES", "write_npz"]
+__all__ = ["Status", "Trajectory", "QUANTITIES", "QUANTITIES_3D", "write_npz"]
 
 #: Per-block quantities stored in a trajectory, in column order.
 QUANTITIES = ("theta", "x", "z", "wobble")
+#: Per-block quantities of motion out of the x–z plane, stored where any is not zero.
+QUANTITIES_3D = ("y", "roll", "twist")
 
 
 class Status(str, Enum):
@@ -72,6 +74,14 @@ class Trajectory:
     wobble : ndarray, shape (n, n_blocks), optional
         Out-of-plane rotation (rad): angle between the block's y axis and the
         world y axis; 0 for planar methods.
+    y : ndarray, shape (n, n_blocks), optional
+        Centroid position across the plane (m); 0 for planar methods.
+    roll : ndarray, shape (n, n_blocks), optional
+        Rotation about +x (rad), atan2(−R₁₂, R₂₂): positive when the top moves toward −y
+        (θ's twin for rocking about x); 0 for planar methods.
+    twist : ndarray, shape (n, n_blocks), optional
+        Rotation of the block about its own vertical axis (rad, the twist of the swing–twist
+        decomposition about z, in (−π, π]); 0 for planar methods.
     status : Status
         Outcome of the run.
     message : str
@@ -97,6 +107,9 @@ class Trajectory:
     x: np.ndarray
     z: np.ndarray
     wobble: np.ndarray
+    y: np.ndarray
+    roll: np.ndarray
+    twist: np.ndarray
     status: Status = Status.OK
     message: str = ""
     wall_time: float = 0.0
@@ -108,14 +121,16 @@ class Trajectory:
     impacts: np.ndarray | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
-    # written out rather than generated: x, z and wobble may be left out (None) but are
-    # always arrays once built, and the arrays may be given as any array-like
+    # written out rather than generated: x, z, wobble and the 3D quantities may be left out
+    # (None) but are always arrays once built, and the arrays may be given as any array-like
     def __init__(self, t: ArrayLike, theta: ArrayLike, x: ArrayLike | None = None,
                  z: ArrayLike | None = None, wobble: ArrayLike | None = None,
                  status: Status | str = Status.OK, message: str = "", wall_time: float = 0.0,
                  cpu_time: float = 0.0, engine: str = "", engine_version: str = "",
                  settings: dict[str, Any] | None = None, scenario: str = "",
-                 impacts: ArrayLike | None = None, extra: dict[str, Any] | None = None) -> None:
+                 impacts: ArrayLike | None = None, extra: dict[str, Any] | None = None,
+                 y: ArrayLike | None = None, roll: ArrayLike | None = None,
+                 twist: ArrayLike | None = None) -> None:
         self.t = np.asarray(t, dtype=float).reshape(-1)
         n = self.t.size
         self.theta = _as_2d(theta, n, "theta")
@@ -123,6 +138,9 @@ class Trajectory:
         self.x = _as_2d(np.full((n, nb), np.nan) if x is None else x, n, "x")
         self.z = _as_2d(np.full((n, nb), np.nan) if z is None else z, n, "z")
         self.wobble = _as_2d(np.zeros((n, nb)) if wobble is None else wobble, n, "wobble")
+        self.y = _as_2d(np.zeros((n, nb)) if y is None else y, n, "y")
+        self.roll = _as_2d(np.zeros((n, nb)) if roll is None else roll, n, "roll")
+        self.twist = _as_2d(np.zeros((n, nb)) if twist is None else twist, n, "twist")
         self.status = Status(status)
         self.message = message
         self.wall_time = wall_time
@@ -138,6 +156,31 @@ class Trajectory:
     def n_blocks(self) -> int:
         """Number of blocks."""
         return self.theta.shape[1]
+
+    @property
+    def planar(self) -> bool:
+        """True when nothing left the x–z plane (every 3D quantity is exactly 0)."""
+        return not any(np.any(getattr(self, q) != 0.0) for q in QUANTITIES_3D)
+
+    @property
+    def tilt(self) -> np.ndarray:
+        """Angle between each block's z axis and the world's (rad, ≥ 0), from θ and the
+        roll: tan² tilt = tan² θ + tan² roll (the block's z axis ∝ (tan θ, −tan roll, 1))."""
+        return np.arctan(np.hypot(np.tan(self.theta), np.tan(self.roll)))
+
+    @property
+    def azimuth(self) -> np.ndarray:
+        """Direction in which each block's top leans (rad, from +x toward +y)."""
+        return np.arctan2(-np.tan(self.roll), np.tan(self.theta))
+
+    def quantities(self) -> tuple[str, ...]:
+        """The per-block quantities this trajectory stores: :data:`QUANTITIES`, and
+        :data:`QUANTITIES_3D` when it is not :attr:`planar`."""
+        return QUANTITIES if self.planar else QUANTITIES + QUANTITIES_3D
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """``t`` and each stored per-block quantity (:meth:`quantities`), by name."""
+        return {"t": self.t, **{q: getattr(self, q) for q in self.quantities()}}
 
     @classmethod
     def failed(
@@ -166,10 +209,12 @@ class Trajectory:
         }
 
     def columns(self) -> dict[str, np.ndarray]:
-        """Flat columns ``t, theta_1, x_1, z_1, wobble_1, theta_2, ...`` (blocks 1-based)."""
+        """Flat columns ``t, theta_1, x_1, z_1, wobble_1, theta_2, ...`` (blocks 1-based;
+        ``y_1, roll_1, twist_1`` after each block's where the motion left the plane)."""
         cols = {"t": self.t}
+        quantities = self.quantities()
         for i in range(self.n_blocks):
-            for q in QUANTITIES:
+            for q in quantities:
                 cols[f"{q}_{i + 1}"] = getattr(self, q)[:, i]
         return cols
 
@@ -232,7 +277,7 @@ class Trajectory:
         nb = int(meta["n_blocks"])
         arrays = {
             q: np.column_stack([cols[f"{q}_{i + 1}"] for i in range(nb)]).reshape(-1, nb)
-            for q in QUANTITIES
+            for q in QUANTITIES + QUANTITIES_3D if f"{q}_1" in cols or q in QUANTITIES
         }
         return cls(
             t=cols["t"], **arrays, status=Status(meta["status"]), message=meta["message"],

@@ -15,6 +15,7 @@ from rockbench.engines import (
     engine_class,
     get_engine,
     list_engines,
+    orientation_from_quaternions,
     parse_set_options,
     register,
     resolve_engine_names,
@@ -110,6 +111,30 @@ def test_quaternion_angles_sign_convention():
     q_x = np.array([math.cos(0.05), math.sin(0.05), 0.0, 0.0])  # about x: wobble only
     theta, wobble = angles_from_quaternions(q_x)
     assert theta == pytest.approx(0.0, abs=1e-12) and wobble == pytest.approx(0.1)
+
+
+def test_orientation_of_rotations_about_each_axis_and_combined():
+    c, s = math.cos, math.sin
+    about_y = np.array([c(0.15), 0.0, s(0.15), 0.0])  # θ = 0.3 about +y
+    o = orientation_from_quaternions(about_y)
+    assert (o.theta, o.roll, o.twist) == pytest.approx((0.3, 0.0, 0.0), abs=1e-15)
+    about_x = np.array([c(0.1), s(0.1), 0.0, 0.0])  # 0.2 about +x: the top toward −y
+    o = orientation_from_quaternions(about_x)
+    assert (o.theta, o.roll, o.twist, o.wobble) == pytest.approx((0.0, 0.2, 0.0, 0.2),
+                                                                 abs=1e-15)
+    about_z = np.array([c(0.35), 0.0, 0.0, s(0.35)])  # 0.7 about +z: twist only
+    o = orientation_from_quaternions(about_z)
+    assert (o.theta, o.roll, o.twist) == pytest.approx((0.0, 0.0, 0.7), abs=1e-15)
+    # a twist of 0.7 then a lean of 0.3 toward +x (world frame): the lean is unchanged and
+    # the twist is the rotation about the body's own axis
+    w1, v1 = about_y[0], about_y[1:]
+    w2, v2 = about_z[0], about_z[1:]
+    q = np.array([w1 * w2 - v1 @ v2, *(w1 * v2 + w2 * v1 + np.cross(v1, v2))])
+    o = orientation_from_quaternions(q)
+    assert (o.theta, o.roll) == pytest.approx((0.3, 0.0), abs=1e-12)
+    assert o.twist == pytest.approx(0.7, abs=1e-12)
+    # the twist is wrapped to (−π, π]: −q is the same rotation
+    assert orientation_from_quaternions(-about_z).twist == pytest.approx(0.7, abs=1e-12)
 
 
 def test_samples_at_output_rate_and_drives_each_step(carry):

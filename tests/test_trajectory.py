@@ -47,3 +47,30 @@ def test_bad_shapes_and_format(tmp_path):
         Trajectory(t=np.zeros(3), theta=np.zeros((4, 1)))
     with pytest.raises(ValueError, match="format"):
         _traj().save(tmp_path / "x.txt")
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".npz"])
+def test_motion_out_of_the_plane_round_trips_and_planar_files_stay_as_they_were(
+        tmp_path, suffix):
+    tr = _traj()
+    assert tr.planar and "roll_1" not in tr.columns()
+    t = tr.t
+    lean = Trajectory(t=t, theta=np.column_stack([0.1 * t, 0 * t]), x=tr.x, z=tr.z,
+                      y=np.column_stack([0.01 * t, 0 * t]),
+                      roll=np.column_stack([-0.1 * t, 0 * t]),
+                      twist=np.column_stack([0.02 * t, 0 * t]))
+    assert not lean.planar
+    assert list(lean.columns())[:8] == ["t", "theta_1", "x_1", "z_1", "wobble_1", "y_1",
+                                        "roll_1", "twist_1"]
+    lean.save(tmp_path / f"lean{suffix}")
+    back = Trajectory.load(tmp_path / f"lean{suffix}")
+    for q in ("y", "roll", "twist"):
+        np.testing.assert_allclose(getattr(back, q), getattr(lean, q), rtol=1e-9)
+    # equal lean toward +x and toward +y (roll < 0): tilt = atan(√2 tan θ), azimuth 45°
+    end = back.tilt[-1, 0], back.azimuth[-1, 0]
+    assert end[0] == pytest.approx(np.arctan(np.sqrt(2.0) * np.tan(0.1)), rel=1e-12)
+    assert end[1] == pytest.approx(np.pi / 4, rel=1e-12)
+    # a file written before the 3D quantities existed loads with them at zero
+    tr.save(tmp_path / f"old{suffix}")
+    old = Trajectory.load(tmp_path / f"old{suffix}")
+    assert old.planar and old.roll.shape == old.theta.shape

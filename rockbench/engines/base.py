@@ -83,7 +83,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from types import ModuleType
-from typing import Any, ClassVar
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
@@ -98,7 +98,8 @@ from rockbench.scenarios import Scenario
 from rockbench.trajectory import Status, Trajectory
 
 __all__ = ["Engine", "Capabilities", "angles_from_quaternions", "install_hint", "OVERTURN_MARGIN",
-           "require_library", "trajectory_from_poses", "Watchdog"]
+           "require_library", "trajectory_from_poses", "Watchdog", "Orientation",
+           "orientation_from_quaternions"]
 
 
 def install_hint(extra: str, module: str) -> str:
@@ -170,6 +171,33 @@ class Capabilities:
     prisms: bool = True
     no_prisms: str = ""
     base_axes: str = "x"
+
+
+class Orientation(NamedTuple):
+    """The angles a :class:`Trajectory` reports of each sampled orientation (rad)."""
+
+    theta: np.ndarray
+    wobble: np.ndarray
+    roll: np.ndarray
+    twist: np.ndarray
+
+
+def orientation_from_quaternions(q: np.ndarray) -> Orientation:
+    """θ, wobble, roll and twist from unit quaternions (w, x, y, z), shape (..., 4).
+
+    θ = atan2(R₀₂, R₂₂) and the roll atan2(−R₁₂, R₂₂) are the lean of the body's z axis
+    toward +x and toward −y (rotations about +y and +x); the twist is the rotation about
+    the body's own z axis, 2 atan2(q_z, q_w) (the swing–twist decomposition), wrapped to
+    (−π, π]; the wobble is the angle between the body's y axis and the world's.
+    """
+    theta, wobble = angles_from_quaternions(q)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    r12 = 2.0 * (y * z - w * x)
+    r22 = 1.0 - 2.0 * (x * x + y * y)
+    twist = 2.0 * np.arctan2(z, w)
+    twist = np.where(twist > np.pi, twist - 2.0 * np.pi, twist)
+    twist = np.where(twist <= -np.pi, twist + 2.0 * np.pi, twist)
+    return Orientation(theta, wobble, np.arctan2(-r12, r22), twist)
 
 
 def angles_from_quaternions(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -533,9 +561,10 @@ def trajectory_from_poses(poses: np.ndarray, t: np.ndarray,
     """
     status, message = verdict if verdict is not None else (Status.OK, "")
     meta = {**meta, "settings": {**meta["settings"], **effective}}
-    theta, wobble = angles_from_quaternions(poses[..., 3:])
-    return Trajectory(t=t, theta=theta, x=poses[..., 0], z=poses[..., 2], wobble=wobble,
-                      status=status, message=message, **meta)
+    o = orientation_from_quaternions(poses[..., 3:])
+    return Trajectory(t=t, theta=o.theta, x=poses[..., 0], z=poses[..., 2], wobble=o.wobble,
+                      y=poses[..., 1], roll=o.roll, twist=o.twist, status=status,
+                      message=message, **meta)
 
 
 #: A block counts as overturned once |θ| ≥ π/2 − this (rad): a toppled block may settle on

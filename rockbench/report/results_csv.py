@@ -34,7 +34,7 @@ def result_columns(max_blocks: int) -> list[str]:
         *[f"impact_error_{k}" for k in range(1, N_IMPACTS + 1)],
         "horizon", "time_to_rest", "reference_time_to_rest", "error_note",
         "wall_time", "cpu_time", "time_per_simulated_second", "realtime_factor",
-        "slide", "max_wobble",
+        "slide", "max_wobble", "max_roll", "max_twist",
         "settings_hash", "scenario_hash", "engine_version", "trajectory",
     ]
 
@@ -58,6 +58,7 @@ def result_row(r: RunResult) -> dict[str, Any]:
         "error_note": m.error_note, "wall_time": m.wall_time, "cpu_time": m.cpu_time,
         "time_per_simulated_second": m.time_per_simulated_second,
         "realtime_factor": m.realtime_factor, "slide": m.slide, "max_wobble": m.max_wobble,
+        "max_roll": m.max_roll, "max_twist": m.max_twist,
         "settings_hash": m.settings_hash, "scenario_hash": m.scenario_hash,
         "engine_version": m.engine_version, "trajectory": r.trajectory,
     }

@@ -72,6 +72,8 @@ METRICS: dict[str, str] = {
     "cpu_time": "CPU time of the run in s",
     "slide": "largest sliding of the bottom block on the base (m)",
     "max_wobble": "largest out-of-plane rotation (rad)",
+    "max_roll": "largest rotation about +x (rad)",
+    "max_twist": "largest rotation about the block's vertical axis (rad)",
 }
 _NOT_LIMITS = NUMERIC_METRICS - set(METRICS)  # measured, but not an upper limit
 #: Symbolic status rules.
