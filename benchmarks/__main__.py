@@ -1,5 +1,5 @@
 """``python -m benchmarks [--quick] [--only overhead,analytic,scaling,paper,study,rollout,
-pareto] [--out FILE]``.
+pareto,fragility,verdict,batch] [--out FILE]``.
 
 Runs the speed benchmarks of issue 7 (and issue 19's ``study``, ``rollout`` and
 ``pareto`` sections: runner overhead, MuJoCo batches, presets against the
@@ -26,7 +26,7 @@ from benchmarks import load, machine_info
 MODULES = {"overhead": "overhead", "analytic": "analytic_speed", "scaling": "scaling",
            "paper": "paper_times", "study": "study_overhead", "rollout": "mujoco_rollout",
            "pareto": "preset_pareto",
-           "fragility": "fragility_cost", "verdict": "verdict_cost"}
+           "fragility": "fragility_cost", "verdict": "verdict_cost", "batch": "batched_runs"}
 SECTIONS = tuple(MODULES)
 HERE = Path(__file__).resolve().parent
 
