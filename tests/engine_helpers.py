@@ -20,6 +20,7 @@ from rockbench.geometry import Block, Geometry, Prism, Support, stack
 from rockbench.geometry.polygon import rotate
 from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario, SinePulse, get_scenario
+from rockbench.scenarios.excitation import Components
 from rockbench.studies.tilting import quasi_static, tilting_table
 from rockbench.trajectory import Status, Trajectory
 
@@ -100,6 +101,30 @@ def check_base_follows_excitation(probe: Engine, preset: str, abs_tol: float) ->
     tr = probe.simulate(sc, preset)
     assert tr.status == Status.OK
     assert probe.base_end == pytest.approx(float(exc.displacement(exc.end_time)), abs=abs_tol)
+
+
+def check_base_drives_y_and_z(engine: Engine, *, z_tol: float, theta_tol: float = 1e-5,
+                              drag_tol: float = 1e-5, planar: bool = True) -> None:
+    """Single #2 on a base that moves vertically rides it within ``z_tol`` (m) without
+    rocking (|θ| < ``theta_tol``); on a base moving along y (a 3 Hz / 4 mm pulse, at most
+    1.4 m/s²: the block sticks on μ = 1) it is carried by friction to the base's end, within
+    ``drag_tol`` (m), staying put in x and not rocking. With ``planar``, the engine's
+    ``planar`` knob (which would carry the block rigidly along y) makes that unsupported."""
+    up = Scenario("up", SINGLE2, excitation=Components(z=SinePulse(4.0, 0.003)), duration=0.5)
+    tr = engine.simulate(up, "accurate")
+    assert tr.status is Status.OK
+    uz = up.motion.z.displacement(tr.t)
+    np.testing.assert_allclose(tr.z[:, 0] - tr.z[0, 0], uz, atol=z_tol)
+    assert np.max(np.abs(tr.theta)) < theta_tol
+    pulse = SinePulse(3.0, 0.004)
+    side = Scenario("side", SINGLE2, excitation=Components(y=pulse), duration=0.5)
+    if planar:
+        locked = engine.simulate(side, {"planar": True})
+        assert locked.status is Status.UNSUPPORTED and "planar" in locked.message
+    tr = engine.simulate(side, "accurate")
+    assert tr.status is Status.OK
+    assert tr.y[-1, 0] == pytest.approx(float(pulse.displacement(pulse.end_time)), abs=drag_tol)
+    assert np.max(np.abs(tr.theta)) < 10 * theta_tol and np.max(np.abs(tr.x)) < drag_tol
 
 
 def check_paper_stack_under_pulse_runs(engine: Engine) -> None:
