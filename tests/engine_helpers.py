@@ -127,6 +127,48 @@ def check_base_drives_y_and_z(engine: Engine, *, z_tol: float, theta_tol: float 
     assert np.max(np.abs(tr.theta)) < 10 * theta_tol and np.max(np.abs(tr.x)) < drag_tol
 
 
+#: Single #2 turned by 90° about z: its depth (0.17 m) is the rocking width of a motion along y.
+SINGLE2_Y = Block(SINGLE2.depth, SINGLE2.width, SINGLE2.height, density=2670.0)
+
+
+def check_rides_a_base_along_y(engine: Engine, *, y_tol: float, still_tol: float = 1e-6
+                               ) -> None:
+    """Single #2 turned by 90° under 0.8 of its uplift acceleration along y (g · depth /
+    height) rides the base: its y within ``y_tol`` of the base's throughout and at the end,
+    no rocking either way and no drift along x (within ``still_tol``)."""
+    f = 3.0
+    amp = 0.8 * 9.81 * (SINGLE2_Y.depth / SINGLE2_Y.height) / (2 * math.pi * f) ** 2
+    sc = Scenario("side", SINGLE2_Y, excitation=Components(y=SinePulse(f, amp)), duration=1.0)
+    tr = engine.simulate(sc, "accurate")
+    assert tr.status is Status.OK, tr.message
+    uy = sc.motion.y.displacement(tr.t)
+    assert np.max(np.abs(tr.y[:, 0] - uy)) < y_tol
+    assert tr.y[-1, 0] == pytest.approx(2 * math.pi * amp, abs=1e-6)
+    assert np.max(np.abs(tr.roll)) < still_tol and np.max(np.abs(tr.theta)) < still_tol
+    assert np.max(np.abs(tr.x)) < still_tol
+
+
+def check_rocks_about_x_like_housner(engine: Engine, *, shape_tol: float = 0.01,
+                                     plane_tol: float = 1e-5) -> None:
+    """Single #2 turned by 90° under the 3 Hz / 8 mm pulse along y rocks about x as Housner's
+    Single #2 does under it along x: the peak roll within the pulses' 2 %, the roll the
+    mirror of θ_ref within ``shape_tol`` λ (the top leans toward −y as it would toward −x),
+    the wobble equal to |roll|, and θ and x within ``plane_tol``."""
+    pulse = SinePulse(3.0, 0.008)
+    sc = Scenario("rock-y", SINGLE2_Y, excitation=Components(y=pulse), duration=1.5)
+    ref = single_block_reference(Scenario("rock-x", SINGLE2, excitation=pulse, duration=1.5))
+    tr = engine.simulate(sc, "accurate")
+    assert tr.status is Status.OK, tr.message
+    assert lam(sc) == pytest.approx(math.atan(SINGLE2.depth / SINGLE2.height))
+    rx, th = tr.roll[:, 0], ref.theta[:, 0]
+    assert np.max(np.abs(rx)) == pytest.approx(np.max(np.abs(th)), rel=0.02)
+    np.testing.assert_allclose(tr.wobble[:, 0], np.abs(rx), atol=1e-6)
+    i = int(np.argmax(np.abs(th)))
+    assert np.sign(rx[i]) == -np.sign(th[i])
+    assert np.max(np.abs(rx + th)) < shape_tol * lam(sc)
+    assert np.max(np.abs(tr.theta)) < plane_tol and np.max(np.abs(tr.x)) < plane_tol
+
+
 def check_paper_stack_under_pulse_runs(engine: Engine) -> None:
     """The paper's two-block stack under a 3.3 Hz / 4 mm pulse (fast preset) runs,
     stays finite and travels with the base."""

@@ -12,6 +12,9 @@ pytest.importorskip("pybullet")
 from engine_helpers import (  # noqa: E402
     check_arch_rides_its_supports,
     check_assembly_stays_at_rest,
+    check_base_drives_y_and_z,
+    check_rides_a_base_along_y,
+    check_rocks_about_x_like_housner,
     check_tilting_table,
     inclined_scene,
     lam,
@@ -248,3 +251,21 @@ def test_interface_friction_zero_in_an_assembly_is_unsupported(engine: BulletEng
 @pytest.mark.slow
 def test_tilting_table_onset_matches_the_collapse_factor() -> None:
     check_tilting_table("bullet")
+
+
+# ---------------------------------------------------------------- base motion along y and z
+def test_base_drives_y_and_z() -> None:
+    """The engines' common check: Single #2 rides a base moving vertically and is carried
+    by friction along y (this engine has no planar knob)."""
+    # measured: z within 2.1e-11 m, the y drag's end within 3.8e-9 m
+    check_base_drives_y_and_z(BulletEngine(), z_tol=1e-6, planar=False)
+
+
+def test_a_base_moving_along_y_carries_the_block() -> None:
+    # measured: y within 2.8e-8 m of the base
+    check_rides_a_base_along_y(BulletEngine(), y_tol=1e-6)
+
+
+def test_a_block_excited_along_y_rocks_about_x_like_housner() -> None:
+    # measured: the roll within 7.4e-4 λ of −θ_ref
+    check_rocks_about_x_like_housner(BulletEngine(), plane_tol=1e-5)

@@ -15,6 +15,9 @@ from engine_helpers import (  # noqa: E402, E501
     PAPER_STACK,
     SINGLE2,
     check_assembly_stays_at_rest,
+    check_base_drives_y_and_z,
+    check_rides_a_base_along_y,
+    check_rocks_about_x_like_housner,
     check_tilting_table,
     inclined_scene,
     lam,
@@ -27,6 +30,7 @@ from rockbench.engines.drive import BaseDrive  # noqa: E402
 from rockbench.engines.settings import SettingsError  # noqa: E402
 from rockbench.geometry import Block, Geometry, Support, stack  # noqa: E402
 from rockbench.scenarios import Contact, Scenario, SinePulse, get_scenario  # noqa: E402
+from rockbench.scenarios.excitation import Components  # noqa: E402
 from rockbench.trajectory import Status  # noqa: E402
 
 
@@ -241,3 +245,40 @@ def test_interface_friction_below_the_base_friction_off_a_column_is_unsupported(
 @pytest.mark.slow
 def test_tilting_table_onset_matches_the_collapse_factor() -> None:
     check_tilting_table("dart", {"preset": "fast"}, slower_first=False, extrapolated=0.01)
+
+
+# ---------------------------------------------------------------- base motion along y and z
+def test_the_base_joint_is_prismatic_along_x_only() -> None:
+    assert DartEngine.capabilities.base_axes == "xyz"
+    for exc, kind in ((SinePulse(3.0, 0.008), "PrismaticJoint"),
+                      (Components(y=SinePulse(3.0, 0.008)), "TranslationalJoint"),
+                      (Components(z=SinePulse(4.0, 0.003)), "TranslationalJoint")):
+        sc = Scenario("drive", SINGLE2, excitation=exc, duration=0.3)
+        eng = DartEngine()
+        eng.drive = BaseDrive(sc.motion, sc.duration)  # what simulate() sets before _build
+        dt = eng._build(sc, eng.settings("fast"))
+        assert type(eng._base_joint).__name__ == kind
+        n = int(round(0.1 / dt))
+        eng._advance_driven(0.0, n, dt)
+        # the base stands on u_g at the step nodes: along x, or along x, y and z
+        u = sc.motion.displacement(n * dt)
+        expected = u if kind == "TranslationalJoint" else u[:1]
+        np.testing.assert_allclose(eng._base_joint.getPositions(), expected, atol=1e-12)
+        eng._teardown()
+
+
+def test_base_drives_y_and_z() -> None:
+    """The engines' common check: Single #2 rides a base moving vertically and is carried
+    by friction along y (this engine has no planar knob)."""
+    # measured: z within 3.1e-12 m, the y drag's end within 2e-16 m
+    check_base_drives_y_and_z(DartEngine(), z_tol=1e-6, planar=False)
+
+
+def test_a_base_moving_along_y_carries_the_block() -> None:
+    # measured: y within 6.1e-11 m of the base
+    check_rides_a_base_along_y(DartEngine(), y_tol=1e-6)
+
+
+def test_a_block_excited_along_y_rocks_about_x_like_housner() -> None:
+    # measured: the roll within 1.7e-5 λ of −θ_ref
+    check_rocks_about_x_like_housner(DartEngine(), plane_tol=1e-6)

@@ -8,11 +8,13 @@ chamfered block is a box spanning its flat faces or its hull (``chamfer_shape``)
 ground is a box whose top face is z = 0: a static body in free rocking, and under a
 moving base a fixed-base multibody whose velocity is prescribed every step (Bullet
 ignores a static body's velocity, which would then not drag a block through
-friction). Fixed supports are bodies of the ground's kind. No damping, no sleeping.
+friction): the secant velocity (u_g(t_{i+1}) − u_g(t_i)) / dt of the step, along x, y
+and z, its position reset to u_g once per output sample. Fixed supports are bodies of
+the ground's kind, moved with it. No damping, no sleeping.
 Bullet multiplies the friction and restitution of the two bodies in contact, so each
 body gets coefficients whose products are the scenario's
 (:func:`~rockbench.engines.friction.product_frictions`). The base motion is applied
-along x only.
+along x, y and z.
 
 Presets and knobs:
 
@@ -50,6 +52,9 @@ from rockbench.geometry.polygon import rotate
 from rockbench.scenarios import Scenario
 
 __all__ = ["BulletEngine", "BulletSettings"]
+
+#: A still base's velocity (m/s).
+_ZERO = (0.0, 0.0, 0.0)
 
 #: Collision margin of hull and mesh blocks when ``collision_margin`` is None (m).
 _DEFAULT_HULL_MARGIN = 1e-4
@@ -195,7 +200,8 @@ class BulletEngine(Engine):
 
     name: ClassVar[str] = "bullet"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
-                                                         chamfer=True, assemblies=True)
+                                                         chamfer=True, assemblies=True,
+                                                         base_axes="xyz")
     Settings: ClassVar[type[EngineSettings]] = BulletSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         # 0.1 ms steps (fps 1000 × 10 sub-steps), every solver pass run: ≤ 5e-3 λ on the
@@ -356,13 +362,21 @@ class BulletEngine(Engine):
 
         # base kinematics per step, precomputed: position u(t_i) and the secant
         # velocity (u(t_{i+1}) − u(t_i)) / dt, so that Bullet's integration of the
-        # base lands exactly on u(t_{i+1}) and the block feels ü_g at mid-step
+        # base lands exactly on u(t_{i+1}) and the block feels ü_g at mid-step; both as
+        # (x, y, z) tuples, a base moving along x only with exact zeros along y and z
         if moving:
             n = drive.steps_until_stop(dt) + int(math.ceil(out_dt / dt)) + 2
-            u = drive.displacement(drive.grid(dt, n + 1))[:, 0]
-            self._u = u.tolist()
-            self._v = (np.diff(u) / dt).tolist()
-            self._u_end = float(drive.final_displacement()[0])
+            grid = drive.grid(dt, n + 1)
+            if drive.axes == ("x",):  # the planar benchmark's values, bit for bit
+                u = drive.displacement(grid)[:, 0]
+                self._u = [(x, 0.0, 0.0) for x in u.tolist()]
+                self._v = [(v, 0.0, 0.0) for v in (np.diff(u) / dt).tolist()]
+                self._u_end = (float(drive.final_displacement()[0]), 0.0, 0.0)
+            else:
+                u3 = drive.displacement(grid)
+                self._u = [tuple(p) for p in u3.tolist()]
+                self._v = [tuple(p) for p in (np.diff(u3, axis=0) / dt).tolist()]
+                self._u_end = tuple(drive.final_displacement().tolist())
         return dt
 
     def _block_shape(self, blk: Any, s: BulletSettings, phi: float = 0.0) -> int:
@@ -446,18 +460,24 @@ class BulletEngine(Engine):
         if i < len(self._v):
             u, v = self._u[i], self._v[i]
         else:  # beyond the precomputed window (should not happen): hold still
-            u, v = self._u_end, 0.0
+            u, v = self._u_end, _ZERO
         self._place_base(u, v)
 
-    def _place_base(self, u: float, v: float) -> None:
+    def _ground_at(self, u: tuple[float, ...]) -> tuple[float, float, float]:
+        """The ground body's position at base displacement ``u`` (x, y, z)."""
+        z = self._ground_z if u[2] == 0.0 else self._ground_z + u[2]
+        return (u[0], u[1], z)
+
+    def _place_base(self, u: tuple[float, ...], v: tuple[float, ...]) -> None:
         """Put the ground (and the supports) at displacement ``u`` with velocity ``v``."""
         pb, g, cid = self._pb, self._ground, self._cid
-        pb.resetBasePositionAndOrientation(g, (u, 0.0, self._ground_z), (0.0, 0.0, 0.0, 1.0), cid)
-        pb.resetBaseVelocity(g, (v, 0.0, 0.0), (0.0, 0.0, 0.0), cid)
+        pb.resetBasePositionAndOrientation(g, self._ground_at(u), (0.0, 0.0, 0.0, 1.0), cid)
+        pb.resetBaseVelocity(g, v, (0.0, 0.0, 0.0), cid)
         for body, px, pz in self._supports:
-            pb.resetBasePositionAndOrientation(body, (u + px, 0.0, pz), (0.0, 0.0, 0.0, 1.0),
+            z = pz if u[2] == 0.0 else pz + u[2]
+            pb.resetBasePositionAndOrientation(body, (u[0] + px, u[1], z), (0.0, 0.0, 0.0, 1.0),
                                                cid)
-            pb.resetBaseVelocity(body, (v, 0.0, 0.0), (0.0, 0.0, 0.0), cid)
+            pb.resetBaseVelocity(body, v, (0.0, 0.0, 0.0), cid)
 
     def _advance_driven(self, t0: float, n: int, dt: float) -> None:
         # _drive_base + _advance(1) per step in one loop over local names, except that the
@@ -477,20 +497,19 @@ class BulletEngine(Engine):
         if self._supports:  # the supports move with the ground
             self._place_base(self._u[i0], self._v[i0])
             bases = [g] + [body for body, _, _ in self._supports]
-            for v in self._v[i0:i0 + n]:
-                vel = (v, 0.0, 0.0)
+            for vel in self._v[i0:i0 + n]:
                 for body in bases:
                     reset_vel(body, vel, zero, cid)
                 step(cid)
             return
-        pb.resetBasePositionAndOrientation(g, (self._u[i0], 0.0, self._ground_z),
+        pb.resetBasePositionAndOrientation(g, self._ground_at(self._u[i0]),
                                            (0.0, 0.0, 0.0, 1.0), cid)
-        for v in self._v[i0:i0 + n]:
-            reset_vel(g, (v, 0.0, 0.0), zero, cid)
+        for vel in self._v[i0:i0 + n]:
+            reset_vel(g, vel, zero, cid)
             step(cid)
 
     def _fix_base(self) -> bool:
-        self._place_base(self._u_end, 0.0)
+        self._place_base(self._u_end, _ZERO)
         return True
 
     def _advance(self, n: int) -> None:

@@ -5,10 +5,12 @@ DART steps velocity-based (semi-implicit Euler), with a linear complementarity p
 ``Skeleton`` on a ``FreeJoint`` with the block's mass and full inertia tensor and one
 shape: a box, or a triangle mesh of the prism for a convex prism (a chamfered block: by
 default the box spanned by its flat faces, or its prism mesh, ``chamfer_shape``). The
-base is a box skeleton (top face z = 0) on a ``PrismaticJoint`` along x whose
-``VELOCITY`` actuator is commanded every step with the secant velocity of the base
-motion, so that its position follows u_g(t) exactly at the step nodes; fixed supports
-are more shapes of the base body. The base motion is applied along x only. Sleeping
+base is a box skeleton (top face z = 0) on a ``PrismaticJoint`` along x (a base that
+moves along x only: the planar benchmark's model) or a ``TranslationalJoint`` (x, y and
+z: a base that also moves along y or z) whose ``VELOCITY`` actuator is commanded every
+step with the secant velocity of the base motion, so that its position follows u_g(t)
+exactly at the step nodes; fixed supports are more shapes of the base body. The base
+motion is applied along x, y and z. Sleeping
 is switched off. DART multiplies the restitutions of a pair, so each body gets sqrt(e)
 (``restitution_mode``), and gives a pair the smaller of its two friction coefficients:
 a column's bottom block gets max(μ, μ_if) and the others μ_if (exact for any μ, μ_if);
@@ -178,7 +180,8 @@ class DartEngine(Engine):
 
     name: ClassVar[str] = "dart"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
-                                                        chamfer=True, assemblies=True)
+                                                        chamfer=True, assemblies=True,
+                                                        base_axes="xyz")
     Settings: ClassVar[type[EngineSettings]] = DartSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {"timestep": 2.5e-5, "collision_detector": "fcl"},
@@ -251,8 +254,10 @@ class DartEngine(Engine):
         e = float(scenario.contact.restitution)
         e_body = math.sqrt(e) if s.restitution_mode == "sqrt" else e
 
-        # base: a box (top face z = 0) on a prismatic joint along x, driven kinematically
+        # base: a box (top face z = 0) on a prismatic joint along x, or a translational
+        # joint if it also moves along y or z, driven kinematically
         drive = self.drive
+        planar = set(drive.axes) <= {"x"}
         t_move = drive.stop
         u_max = drive.travel
         span = 4.0 * (geo.total_height + max(b.width for b in scenario.blocks))
@@ -263,8 +268,11 @@ class DartEngine(Engine):
         depth = 4.0 * max(b.depth for b in scenario.blocks) + span
         thick = max(0.5, 0.25 * geo.total_height)
         base = dart.dynamics.Skeleton("base")
-        joint, body = base.createPrismaticJointAndBodyNodePair()
-        joint.setAxis(np.array([1.0, 0.0, 0.0]))
+        if planar:
+            joint, body = base.createPrismaticJointAndBodyNodePair()
+            joint.setAxis(np.array([1.0, 0.0, 0.0]))
+        else:
+            joint, body = base.createTranslationalJointAndBodyNodePair()
         joint.setActuatorType(dart.dynamics.ActuatorType.VELOCITY
                               if s.base_drive == "velocity"
                               else dart.dynamics.ActuatorType.ACCELERATION)
@@ -315,30 +323,44 @@ class DartEngine(Engine):
         self._step = world.step
         self._base_joint = joint
         self._set_command = joint.setCommand
+        self._set_commands = joint.setCommands
         self._dt = dt
-        # base commands for every step while it moves, computed once (vectorised)
-        self._cmd: list[float] = []
+        # base commands for every step while it moves, computed once (vectorised): floats
+        # for the prismatic joint, (x, y, z) arrays for the translational one
+        self._planar = planar
+        self._cmd: list[Any] = []
         if t_move > 0:
             # one output interval of margin: the loop fixes the base at a sample boundary
             n = int(math.ceil((t_move + 1.0 / scenario.output_rate) / dt)) + 2
             t = drive.grid(dt, n + 1)
             f = drive.displacement if s.base_drive == "velocity" else drive.velocity
-            self._cmd = (np.diff(f(t)[:, 0]) / dt).tolist()
-            # the base stands still at the start, the excitation starts from rest
-            joint.setPosition(0, 0.0)
+            if planar:
+                self._cmd = (np.diff(f(t)[:, 0]) / dt).tolist()
+                # the base stands still at the start, the excitation starts from rest
+                joint.setPosition(0, 0.0)
+            else:
+                self._cmd = list(np.diff(f(t), axis=0) / dt)
+                joint.setPositions(np.zeros(3))
         self._base_fn = drive.displacement if s.base_drive == "velocity" else drive.velocity
         self._poses = np.empty((len(self._skels), 7))
         self._get_positions = [sk.getPositions for sk in self._skels]
         return dt
 
     def _drive_base(self, t: float, dt: float) -> None:
-        self._set_command(0, self._command(int(round(t / dt)), t, dt))
+        command = self._command(int(round(t / dt)), t, dt)
+        if self._planar:
+            self._set_command(0, command)
+        else:
+            self._set_commands(command)
 
-    def _command(self, i: int, t: float, dt: float) -> float:
-        """Base command for step ``i`` (starting at time ``t``)."""
+    def _command(self, i: int, t: float, dt: float) -> Any:
+        """Base command for step ``i`` (starting at time ``t``): a float along x for the
+        prismatic joint, an (x, y, z) array for the translational one."""
         if i < len(self._cmd):
             return self._cmd[i]
         f = self._base_fn  # past the precomputed span (not expected): evaluate directly
+        if not self._planar:
+            return (f(t + dt) - f(t)) / dt
         return (float(f(t + dt)[0]) - float(f(t)[0])) / dt
 
     def _advance_driven(self, t0: float, n: int, dt: float) -> None:
@@ -348,6 +370,12 @@ class DartEngine(Engine):
             super()._advance_driven(t0, n, dt)
             return
         step, setc = self._step, self._set_command
+        if not self._planar:
+            sets = self._set_commands
+            for c in self._cmd[i0:i0 + n]:
+                sets(c)
+                step()
+            return
         for v in self._cmd[i0:i0 + n]:
             setc(0, v)
             step()
@@ -382,3 +410,4 @@ class DartEngine(Engine):
         self._get_positions = []
         self._base_joint = None
         self._set_command = None
+        self._set_commands = None

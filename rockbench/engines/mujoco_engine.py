@@ -1,15 +1,17 @@
-"""MuJoCo engine plugin: rigid blocks as free bodies on a box base driven along x.
+"""MuJoCo engine plugin: rigid blocks as free bodies on a box base driven along x, y and z.
 
 The scene is an MJCF string built from the scenario. Each block is a body with a free
 joint, its frame at the centroid, with the block's mass and inertia; its collision
 shape is a ``box`` geom, or a ``mesh`` geom of its prism for a chamfered block or a
 convex prism (MuJoCo collides with the convex hull; ``multiccd`` gives a flat face
 several contact points). The ground is a box whose top face is z = 0: a static world
-geom in free rocking, otherwise a heavy body on a slide joint along x whose position
-and velocity are overwritten with the base motion's before every step, and a force
-gives it exactly the acceleration to the next step's velocity (a mocap body would not
-drag the blocks through friction). Once the motion ends a huge damping holds it still,
-so that steps are batched in C. The base motion is applied along x only. Contacts are
+geom in free rocking, otherwise a heavy body on one slide joint per axis along which the
+base moves (x, y and z; a scenario moving along x only gets the x joint only, the model
+of the planar benchmark) whose positions and velocities are overwritten with the base
+motion's before every step, and a force gives each exactly the acceleration to the next
+step's velocity (plus the base's weight along z; a mocap body would not drag the blocks
+through friction). Once the motion ends a huge damping holds it still, so that steps
+are batched in C. The base motion is applied along x, y and z. Contacts are
 condim 3 with Coulomb friction (an interface friction on the blocks' geoms, the base's
 on the base geom, whose ``priority`` rules its contacts) and a tight ``solimp``. No
 damping, no sleeping.
@@ -47,7 +49,7 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
-from rockbench.engines.drive import BaseDrive
+from rockbench.engines.drive import AXIS, BaseDrive
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
 from rockbench.geometry import Block
@@ -59,6 +61,8 @@ __all__ = ["MujocoEngine", "MujocoSettings"]
 _BASE_MASS_RATIO = 1.0e6
 #: Excitation samples precomputed per chunk (bounded memory for long records).
 _CHUNK = 20000
+#: The base's slide joint along each axis: name, axis.
+_SLIDES = {"x": ("slide", "1 0 0"), "y": ("slide_y", "0 1 0"), "z": ("slide_z", "0 0 1")}
 
 
 @dataclass(frozen=True)
@@ -176,7 +180,8 @@ class MujocoEngine(Engine):
 
     name: ClassVar[str] = "mujoco"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
-                                                        chamfer=True, assemblies=True)
+                                                        chamfer=True, assemblies=True,
+                                                        base_axes="xyz")
     Settings: ClassVar[type[EngineSettings]] = MujocoSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
@@ -233,6 +238,8 @@ class MujocoEngine(Engine):
         ext = geo.total_height + max(b.width for b in blocks) + geo.room
         hx = 2.0 * ext + 2.0 * drive.travel + 1.0
         hy = 2.0 * max(b.depth for b in blocks) + 0.5
+        if "y" in drive.axes:  # as wide as long: the base travels, the blocks rock along y
+            hy = max(hy, hx)
         hz = 0.25 * ext + 0.1
         flags = "" if s.multiccd else ' multiccd="disable"'
         assets, bodies = [], []
@@ -271,8 +278,11 @@ class MujocoEngine(Engine):
         else:
             mb = _BASE_MASS_RATIO * mass_total
             ib = mb * (hx * hx + hz * hz) / 3.0  # irrelevant (no rotation), but positive
-            base = (f'<body name="base" pos="0 0 0"><joint name="slide" type="slide" '
-                    f'axis="1 0 0" damping="0" armature="0"/>'
+            # one slide joint per moving axis, in x, y, z order ("slide" along x)
+            joints = "".join(
+                f'<joint name="{_SLIDES[a][0]}" type="slide" axis="{_SLIDES[a][1]}" '
+                'damping="0" armature="0"/>' for a in drive.axes)
+            base = (f'<body name="base" pos="0 0 0">{joints}'
                     f'<inertial pos="0 0 {_fmt(-hz)}" mass="{_fmt(mb)}" '
                     f'diaginertia="{_fmt(ib)} {_fmt(ib)} {_fmt(ib)}"/>{base_geom}</body>')
         return (
@@ -302,13 +312,21 @@ class MujocoEngine(Engine):
         self._dt = float(self._model.opt.timestep)
         drive = self.drive
         self._chunk_start = self._chunk_end = -1
-        self._ul: list[float] = []
-        self._vl: list[float] = []
-        self._fl: list[float] = []
+        # per step: plain floats for a base moving along x only (one slide joint: the
+        # planar benchmark's model and loops), else tuples, one value per slide joint
+        self._ul: list[Any] = []
+        self._vl: list[Any] = []
+        self._fl: list[Any] = []
+        self._axes = drive.axes
+        self._cols = [AXIS[a] for a in self._axes]
+        self._na = len(self._axes)
+        self._planar = self._axes == ("x",)
         if drive.moving:
-            self._jq = 7 * n  # slide joint: after the n free joints
+            self._jq = 7 * n  # slide joints: after the n free joints
             self._jv = 6 * n
             self._mbase = float(self._model.body_mass[n + 1])
+            # the force that holds the base's weight along z (gravity acts on its joint)
+            self._hold = [self._mbase * scenario.g if a == "z" else 0.0 for a in self._axes]
             # steps the base loop drives at most: to the end of the motion (or of the run),
             # then up to one output interval more (the base is fixed after the first sample
             # past the end); short runs thus precompute only what they use
@@ -328,12 +346,21 @@ class MujocoEngine(Engine):
         dt = self._dt
         size = max(n, min(_CHUNK, self._n_drive - i0))
         t = self.drive.grid(dt, size + 1, start=i0)
-        self._u = self.drive.displacement(t)[:, 0]
-        self._v = self.drive.velocity(t)[:, 0]
-        # the force that takes the base from v(t) to v(t + dt) in one (semi-implicit) step
-        self._f = self._mbase * np.diff(self._v) / dt
-        # plain floats for the stepping loops (cheaper to index and assign than NumPy scalars)
-        self._ul, self._vl, self._fl = self._u.tolist(), self._v.tolist(), self._f.tolist()
+        if self._planar:
+            self._u = self.drive.displacement(t)[:, 0]
+            self._v = self.drive.velocity(t)[:, 0]
+            # the force that takes the base from v(t) to v(t + dt) in one (semi-implicit) step
+            self._f = self._mbase * np.diff(self._v) / dt
+            # plain floats for the stepping loops (cheaper to index and assign than NumPy
+            # scalars)
+            self._ul, self._vl, self._fl = self._u.tolist(), self._v.tolist(), self._f.tolist()
+        else:  # one column per slide joint; along z the force also holds the base's weight
+            self._u = self.drive.displacement(t)[:, self._cols]
+            self._v = self.drive.velocity(t)[:, self._cols]
+            self._f = self._mbase * np.diff(self._v, axis=0) / dt + np.asarray(self._hold)
+            self._ul = [tuple(r) for r in self._u.tolist()]
+            self._vl = [tuple(r) for r in self._v.tolist()]
+            self._fl = [tuple(r) for r in self._f.tolist()]
         self._chunk_start, self._chunk_end = i0, i0 + size
 
     def _drive_base(self, t: float, dt: float) -> None:
@@ -342,9 +369,15 @@ class MujocoEngine(Engine):
             self._load_chunk(i)
         j = i - self._chunk_start
         d = self._data
-        d.qpos[self._jq] = self._ul[j]
-        d.qvel[self._jv] = self._vl[j]
-        d.qfrc_applied[self._jv] = self._fl[j]
+        jq, jv, na = self._jq, self._jv, self._na
+        if self._planar:
+            d.qpos[jq] = self._ul[j]
+            d.qvel[jv] = self._vl[j]
+            d.qfrc_applied[jv] = self._fl[j]
+        else:
+            d.qpos[jq:jq + na] = self._ul[j]
+            d.qvel[jv:jv + na] = self._vl[j]
+            d.qfrc_applied[jv:jv + na] = self._fl[j]
 
     def _advance_driven(self, t0: float, n: int, dt: float) -> None:
         # the same as _drive_base + _advance(1) per step, in one loop over local names
@@ -354,11 +387,26 @@ class MujocoEngine(Engine):
         a = i0 - self._chunk_start
         m, d, step = self._model, self._data, self._step
         qpos, qvel, qfrc, jq, jv = d.qpos, d.qvel, d.qfrc_applied, self._jq, self._jv
+        if not self._planar:
+            self._drive_steps(self._ul[a:a + n], self._vl[a:a + n], self._fl[a:a + n])
+            return
         for u, v, f in zip(self._ul[a:a + n], self._vl[a:a + n], self._fl[a:a + n],
                            strict=True):
             qpos[jq] = u
             qvel[jv] = v
             qfrc[jv] = f
+            step(m, d)
+
+    def _drive_steps(self, ul: list[Any], vl: list[Any], fl: list[Any]) -> None:
+        """Steps of a base on slide joints other than x alone: (u, v, f) tuples, one per step."""
+        m, d, step, na = self._model, self._data, self._step, self._na
+        qpos = d.qpos[self._jq:self._jq + na]  # views of the slide joints' entries
+        qvel = d.qvel[self._jv:self._jv + na]
+        qfrc = d.qfrc_applied[self._jv:self._jv + na]
+        for u, v, f in zip(ul, vl, fl, strict=True):
+            qpos[:] = u
+            qvel[:] = v
+            qfrc[:] = f
             step(m, d)
 
     def _sample_free(self, out: np.ndarray, k: int) -> None:
@@ -377,6 +425,12 @@ class MujocoEngine(Engine):
         m, d, step, view = self._model, self._data, self._step, self._pose_view
         qpos, qvel, qfrc, jq, jv = d.qpos, d.qvel, d.qfrc_applied, self._jq, self._jv
         ul, vl, fl = self._ul, self._vl, self._fl
+        if not self._planar:
+            for row in out:
+                self._drive_steps(ul[a:a + k], vl[a:a + k], fl[a:a + k])
+                a += k
+                row[...] = view
+            return
         for row in out:
             b = a + k
             for u, v, f in zip(ul[a:b], vl[a:b], fl[a:b], strict=True):
@@ -389,10 +443,11 @@ class MujocoEngine(Engine):
 
     def _fix_base(self) -> bool:
         m, d = self._model, self._data
-        d.qvel[self._jv] = 0.0
-        d.qfrc_applied[self._jv] = 0.0
+        jv = slice(self._jv, self._jv + self._na)
+        d.qvel[jv] = 0.0
+        d.qfrc_applied[jv] = self._hold  # 0, and the base's weight along z
         # implicit damping ≫ mass/dt: any contact push is absorbed within the step
-        m.dof_damping[self._jv] = 1.0e6 * self._mbase / self._dt
+        m.dof_damping[jv] = 1.0e6 * self._mbase / self._dt
         return True
 
     # ------------------------------------------------------------------ step/read
