@@ -8,10 +8,12 @@ Housner single block, a minimal single-block integrator, explicit geometry).
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 from scipy.special import ellipkinc
 
 from rockbench.analytic.overturning import pulse_outcome
@@ -811,3 +813,176 @@ def test_a_block_past_90_degrees_is_overturned_whatever_the_engine_reported():
     assert check_trajectory(calm, sc) is calm
     crashed = Trajectory.failed(Status.CRASHED, "boom", n_blocks=2)
     assert check_trajectory(crashed, sc) is crashed
+
+
+# ------------------------------------------------- vertical base motion (g → g + ü_z, §0)
+def static_threshold(blocks) -> float:
+    """min(b_c/h2, b1/ȳ): |ü_g| / (g + ü_z) at which a resting stack starts (§3.1),
+    from the block parameters alone."""
+    lo, up = blocks
+    ybar = (lo.m * lo.h + up.m * (2 * lo.h + up.h)) / (lo.m + up.m)
+    return min(min(lo.b, up.b) / up.h, lo.b / ybar)
+
+
+def constant(c: float):
+    return lambda t: c * np.ones_like(np.asarray(t, float))
+
+
+@pytest.mark.parametrize("blocks, c, ap", [(G_REF, 2.0, 3.6), (G_U, -2.0, 2.5)])
+def test_a_constant_vertical_acceleration_is_a_change_of_gravity(blocks, c, ap):
+    """In a base accelerating up at c the blocks weigh m (g + c): the motion is that of
+    the model with gravity g + c (the same w_rest: it is a numerical setting), and the
+    vertical inertial force −m c does the work of a uniform field, −c Σ m Δz_G."""
+    acc, te = sine_pulse(ap)
+    m0 = TwoBlockModel(*blocks, G)
+    kw = dict(accel=acc, breakpoints=(te,), end_time=te, t_out=np.linspace(0, 4, 4001),
+              w_rest=1e-3 * min(m0.pM * m0.alphaM, m0.p2 * m0.alpha2))
+    moving = solve_two_blocks(*blocks, g=G, vertical=constant(c), **kw)
+    heavy = solve_two_blocks(*blocks, g=G + c, **kw)
+    assert [n for _, n in moving.patterns] == [n for _, n in heavy.patterns]
+    assert len(moving.patterns) >= 4 and moving.status == heavy.status
+    np.testing.assert_allclose([t for t, _ in moving.patterns], [t for t, _ in heavy.patterns],
+                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(moving.impact_times, heavy.impact_times, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(moving.theta, heavy.theta, rtol=0, atol=1e-9)
+    # the work of −m c on the centroids' heights (the horizontal work is the same in both)
+    g1, g2 = m0.positions(moving.theta[:, 0], moving.theta[:, 1])
+    lo, up = blocks
+    w_z = -c * (lo.m * (g1[:, 1] - g1[0, 1]) + up.m * (g2[:, 1] - g2[0, 1]))
+    ok = np.isfinite(w_z)
+    np.testing.assert_allclose(moving.work[ok] - heavy.work[ok], w_z[ok], rtol=0,
+                               atol=1e-7 * np.max(np.abs(w_z[ok])))
+
+
+@pytest.mark.parametrize("ap, az", [(3.0, 4.0), (3.0, -4.0), (3.5, 6.0)])
+def test_energy_balance_with_horizontal_and_vertical_motion(ap, az):
+    """T + V(g) − W_base + Σ impact losses is constant, with W_base the work of both
+    inertial forces of the accelerating base frame, −m ü_g along x and −m ü_z along z."""
+    acc, te = sine_pulse(ap)
+
+    def vert(t):
+        t = np.asarray(t, float)
+        return np.where((t >= 0) & (t <= te), az * np.sin(3 * math.pi * t), 0.0)
+
+    sol = solve_two_blocks(*G_REF, g=G, accel=acc, vertical=vert, breakpoints=(te,),
+                           end_time=te, t_out=np.linspace(0, 4, 4001))
+    e = sol.energy()
+    ok = ~np.isnan(e)
+    assert len(sol.impacts) >= 3 and ok.sum() > 1000
+    t_imp, losses = sol.impact_times, np.array(sol.impact_losses)
+    cum = np.array([losses[t_imp <= t].sum() for t in sol.t[ok]])
+    scale = np.max(np.abs(e[ok] - e[0]))
+    np.testing.assert_allclose(e[ok] - e[0], sol.work[ok] - cum, rtol=0, atol=1e-8 * scale)
+    # W_base split by axis, as Stieltjes sums −Σ ü(t_mid) Σ m Δx_G on the samples: the
+    # vertical part matters (the balance above would fail without it)
+    lo, up = G_REF
+    g1, g2 = sol.model.positions(sol.theta[ok, 0], sol.theta[ok, 1])
+    t = sol.t[ok]
+    tm = 0.5 * (t[1:] + t[:-1])
+    w_x = -np.cumsum(acc(tm) * np.diff(lo.m * g1[:, 0] + up.m * g2[:, 0]))
+    w_z = -np.cumsum(vert(tm) * np.diff(lo.m * g1[:, 1] + up.m * g2[:, 1]))
+    assert np.max(np.abs(w_z)) > 0.05 * scale
+    np.testing.assert_allclose(sol.work[ok][1:], w_x + w_z, rtol=0, atol=2e-3 * scale)
+
+
+@pytest.mark.parametrize("blocks, pattern", [(G_REF, "M(-1)"), (G_U, "U(-1)")])
+def test_a_vertical_motion_moves_the_uplift_threshold(blocks, pattern):
+    """Uplift from rest when |ü_g| > (g + ü_z) min(tan α2, tan αM). At 0.9 of the static
+    threshold along x alone the stack stays put; with the ground pulled down by 0.4 g as x
+    peaks it starts when 0.9 sin ωt = (1 − 0.4 sin ωt), i.e. sin ωt = 1/1.3. Pushed up by
+    0.4 g while x peaks, 1.2 times the static threshold does not start it in the first
+    half-cycle; in the second the ground is pulled down as x peaks the other way, and it
+    starts toward +x when −1.2 sin ωt = 1 + 0.4 sin ωt, i.e. sin ωt = −1/1.6."""
+    tan_min = static_threshold(blocks)
+    w = 2 * math.pi
+    t_out = np.linspace(0, 1.0, 101)
+
+    def run(kx: float, kz: float | None):
+        acc, te = sine_pulse(kx * G * tan_min)
+        vert = None if kz is None else sine_pulse(kz * G)[0]
+        return solve_two_blocks(*blocks, g=G, accel=acc, vertical=vert, breakpoints=(te,),
+                                end_time=te, t_out=t_out)
+
+    alone = run(0.9, None)
+    assert alone.patterns == [(0.0, "R")] and np.all(alone.theta == 0)
+    down = run(0.9, -0.4)
+    assert down.patterns[1][1] == pattern
+    assert down.patterns[1][0] == pytest.approx(math.asin(1 / 1.3) / w, abs=1e-9)
+    assert down.status in ("ok", "overturned") and len(down.patterns) >= 2
+    assert run(1.2, None).patterns[1][1] == pattern
+    up = run(1.2, 0.4)
+    assert up.patterns[1][1] == pattern.replace("-1", "+1")
+    assert up.patterns[1][0] == pytest.approx(0.5 + math.asin(1 / 1.6) / w, abs=1e-9)
+    assert np.all(up.theta[t_out <= 0.5] == 0)
+
+
+def paper_stack_with(x, z, duration: float) -> Scenario:
+    from rockbench.scenarios import Components
+
+    base = get_scenario("stack-pulse-4.0hz-4mm")
+    return base.replace(name="stack-xz", excitation=Components(x=x, z=z), duration=duration)
+
+
+def test_where_the_base_falls_faster_than_gravity_the_reference_stops():
+    """g + ü_z < 0 at t_f = (π + asin(1/1.5))/ω for a vertical pulse of peak 1.5 g: the
+    stack leaves the ground, which the model does not follow: it stops there."""
+    z = SinePulse(2.0, 1.5 * G / (4 * math.pi) ** 2)
+    t_flight = (math.pi + math.asin(1 / 1.5)) / z.omega
+    root = brentq(lambda t: G + float(z.acceleration(t)), 0.26, 0.37, xtol=1e-14)
+    assert t_flight == pytest.approx(root, abs=1e-12)
+    sc = paper_stack_with(SinePulse(1.0, 3.0 / (2 * math.pi) ** 2), z, 2.0)
+    tr = two_block_reference(sc)
+    assert tr.status is Status.UNSUPPORTED and "leaves the ground" in tr.message
+    said = float(re.search(r"at t = ([0-9.]+) s", tr.message).group(1))
+    assert said == pytest.approx(t_flight, abs=5e-7)
+    assert tr.t[-1] <= t_flight < tr.t[-1] + 1 / sc.output_rate
+    assert np.all(np.isfinite(tr.theta)) and np.all(np.isfinite(tr.z))
+    assert np.max(np.abs(tr.theta)) > 0  # it rocked before it flew
+    # the solver: status "flight" at the root, nothing computed after it
+    lo, up = (BlockParams.from_block(b) for b in sc.geometry.column.blocks)
+    sol = solve_two_blocks(lo, up, g=G, accel=zero_accel, vertical=z.acceleration,
+                           breakpoints=z.breakpoints, end_time=z.end_time,
+                           t_out=np.linspace(0, 1, 1001))
+    assert sol.status == "flight" and sol.flight_time == pytest.approx(root, abs=1e-12)
+    after = sol.t > sol.flight_time
+    assert np.all(np.isnan(sol.theta[after])) and np.all(sol.theta[~after] == 0)
+    # a stack that overturns before the base falls: overturned, at T11's time
+    acc, te = sine_pulse(4.0)
+    sol = solve_two_blocks(*G_REF, g=G, accel=acc, breakpoints=(te, 2.5), end_time=3.0,
+                           vertical=lambda t: np.where(np.asarray(t) > 2.5, -1.5 * G, 0.0),
+                           t_out=np.linspace(0, 3.0, 3001))
+    assert sol.status == "overturned" and sol.overturn_time == pytest.approx(1.8191538,
+                                                                            abs=2e-7)
+    assert sol.flight_time == pytest.approx(2.5, abs=1e-9)
+
+
+def test_a_stack_under_vertical_motion_is_covered_and_rides_on_the_base():
+    """coverage() takes a two-block column whose base moves along x and z; the start time
+    is the root of |ü_x| = (g + ü_z) min(tan α2, tan αM) (both pulses in phase:
+    sin ωt = g T / (A_x − A_z T)) and at rest the centroids ride on the base's z."""
+    from rockbench import analytic
+
+    x, z = SinePulse(4.0, 0.004), SinePulse(4.0, 0.002)
+    sc = paper_stack_with(x, z, 1.0)
+    assert analytic.coverage(sc) == "" and analytic.has_reference(sc)
+    tr = analytic.reference(sc)
+    assert tr.status is Status.OK and tr.theta.shape == (1001, 2)
+    blocks = tuple(BlockParams.from_block(b) for b in sc.geometry.column.blocks)
+    tan_min = static_threshold(blocks)
+    ax, az = x.peak_acceleration(), z.peak_acceleration()
+    t_start = math.asin(G * tan_min / (ax - az * tan_min)) / x.omega
+    (t0, p0), (t1, p1) = tr.extra["patterns"][:2]
+    assert (t0, p0) == (0.0, "R") and p1 == "M(-1)"
+    assert t1 == pytest.approx(t_start, abs=1e-9)
+    # heavier while x peaks: later than along x alone (at sin ωt = g T / A_x)
+    assert t1 > math.asin(G * tan_min / ax) / x.omega + 1e-3
+    rest = tr.t <= t_start
+    lo, up = blocks
+    heights = np.array([lo.h, 2 * lo.h + up.h])
+    np.testing.assert_allclose(tr.z[rest], heights + z.displacement(tr.t[rest])[:, None],
+                               rtol=0, atol=1e-12)
+    assert np.ptp(z.displacement(tr.t)) > 1e-3
+    # the Coulomb slider still takes no vertical motion
+    slide = get_scenario("slide-stack-pulse-5.0hz-4mm-mu0.10")
+    slide = slide.replace(excitation=paper_stack_with(slide.motion.x, z, 1.0).excitation)
+    assert "sliding" in analytic.coverage(slide) and not analytic.has_reference(slide)

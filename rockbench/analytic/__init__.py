@@ -76,10 +76,10 @@ __all__ = [
 def coverage(scenario: Scenario) -> str:
     """Why no analytic model covers ``scenario`` ('' when one does).
 
-    The models are planar: one block (Housner, with the vertical base motion
-    in g + ü_z) or two stacked centred blocks (the two-block model), and the
-    Coulomb slider; other geometries have their static limit-analysis
-    reference only.
+    The models are planar: one block (Housner) or two stacked centred blocks
+    (the two-block model), both with the vertical base motion in g + ü_z, and
+    the Coulomb slider (horizontal base motion only); other geometries have
+    their static limit-analysis reference only.
     """
     col = scenario.geometry.column
     if col is None or len(col) > 2 or not col.centred:
@@ -87,9 +87,9 @@ def coverage(scenario: Scenario) -> str:
     axes = scenario.motion.axes
     if "y" in axes:
         return "no analytic model: the planar models take no base motion along y"
-    if "z" in axes and (len(col) > 1 or slides(scenario)):
-        return ("no analytic model: the vertical base motion enters Housner's single "
-                "rocking block only")
+    if "z" in axes and slides(scenario):
+        return ("no analytic model: the vertical base motion enters the rocking models "
+                "only, not the Coulomb sliding reference")
     return ""
 
 

@@ -76,7 +76,7 @@ from rockbench.trajectory import Status, Trajectory
 
 __all__ = [
     "SingleBlockSolution", "solve_single", "single_block_reference", "scalar_acceleration",
-    "SCAN_STEP", "INTEGRATORS",
+    "SCAN_STEP", "INTEGRATORS", "flight_time",
 ]
 
 #: Sampling step (s) of the scan for the next uplift time.
@@ -499,8 +499,8 @@ class _Solver:
         return outcome, t_stop, omega
 
 
-def _flight_time(az: Callable[[Any], Any], az1: Callable[[float], float], g: float,
-                 t_end: float) -> float | None:
+def flight_time(az: Callable[[Any], Any], az1: Callable[[float], float], g: float,
+                t_end: float) -> float | None:
     """First time in [0, t_end] when g + ü_z < 0 (the block leaves the ground), or None."""
     if not t_end > 0:
         return None
@@ -620,7 +620,7 @@ def solve_single(
                  vertical)
     t_fin = float(t_out[-1])
     t_flight = (None if vertical is None else
-                _flight_time(vertical[0], vertical[1], float(g), min(float(end_time), t_fin)))
+                flight_time(vertical[0], vertical[1], float(g), min(float(end_time), t_fin)))
     if t_flight is not None:
         t_fin = t_flight
     end_time = float(end_time)

@@ -7,6 +7,18 @@ impact outcomes by candidate enumeration (§3.5); arming hysteresis for gaps tha
 start at zero (§5.3); consistency at every phase start (§5.4); Zeno arrest
 (§5.5); rest → wait for the next threshold crossing of |ü_g|.
 
+Vertical base motion (optional, ``vertical=``): with a vertical base
+acceleration ü_z the blocks' weight is m (g + ü_z), so g + ü_z replaces g in the
+equations of motion of every pattern, in the uplift indicators and in the
+thresholds from rest, (g + ü_z) min(tan α2, tan αM)
+(:mod:`rockbench.analytic.twoblock_model`); impacts are unchanged. The work
+integral then includes the work of the vertical inertial forces −m_i ü_z on
+the centroids' heights, so that T + V(g) − W_base stays constant between
+impacts. Where g + ü_z < 0 the base falls faster than the blocks, which leave
+the ground: the model does not follow flight, and the solution stops there
+(status ``"flight"``), as Housner's single-block solution does. Without a
+vertical motion every formula is the horizontal one, unchanged.
+
 Public entry points: :func:`solve_two_blocks` (plain parameters, any
 acceleration function) and :func:`two_block_reference` (a rockbench
 :class:`~rockbench.scenarios.Scenario` → :class:`~rockbench.trajectory.Trajectory`).
@@ -26,7 +38,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from rockbench import provenance
-from rockbench.analytic.housner import scalar_acceleration
+from rockbench.analytic.housner import flight_time, scalar_acceleration
 from rockbench.analytic.twoblock_model import (
     BlockParams,
     Pattern,
@@ -64,7 +76,8 @@ class TwoBlockSolution:
         Absolute rotations θ1 (lower), θ2 (upper) and their rates; NaN after an
         overturn or after the run stopped early.
     status : str
-        ``"ok"``, ``"overturned"`` or ``"incomplete"`` (``max_phases`` reached).
+        ``"ok"``, ``"overturned"``, ``"incomplete"`` (``max_phases`` reached) or
+        ``"flight"`` (g + ü_z < 0: the samples after ``flight_time`` are NaN).
     impacts : list of (float, str, str, str)
         (time, ``"base"`` or ``"interface"``, pattern before, pattern after).
     patterns : list of (float, str)
@@ -76,7 +89,8 @@ class TwoBlockSolution:
     message : str
         Notes (why the run stopped early, ...).
     work : ndarray (n,)
-        Work of the base-inertia forces W_base(t) (J), for energy balances.
+        Work of the base-inertia forces W_base(t) (J), for energy balances:
+        ∫ −ü_g Σ m_i ẋ_Gi dt, plus ∫ −ü_z Σ m_i ż_Gi dt with a vertical motion.
     impact_losses : list of float
         Kinetic energy lost at each impact (J), same order as ``impacts``.
     n_phases : int
@@ -86,6 +100,8 @@ class TwoBlockSolution:
         closed face, ±1 for the pivot side (see :class:`Pattern`).
     model : TwoBlockModel
         The model (constants, energy function, ...).
+    flight_time : float or None
+        First time when g + ü_z < 0 (the run stopped there), None if never.
     """
 
     t: np.ndarray
@@ -102,6 +118,7 @@ class TwoBlockSolution:
     n_phases: int
     contacts: np.ndarray
     model: TwoBlockModel = field(repr=False)
+    flight_time: float | None = None
 
     def energy(self) -> np.ndarray:
         """Mechanical energy T + V (J) at the output times (pivots of each sample's pattern)."""
@@ -125,13 +142,17 @@ class _Run:
     def __init__(
         self, model: TwoBlockModel, accel: Callable[[Any], Any], breakpoints: Sequence[float],
         end_time: float, t_out: np.ndarray, rtol: float, atol: float, w_rest: float,
-        max_phases: int, legacy: bool,
+        max_phases: int, legacy: bool, vertical: Callable[[Any], Any] | None = None,
+        t_stop: float | None = None,
     ) -> None:
         self.m = model
         self.accel = accel
+        # vertical base acceleration ü_z(t), None when the base moves horizontally only
+        # (then every right-hand side, event and threshold is the horizontal one as it was)
+        self.vertical = vertical
         self.end_time = float(end_time)
         self.t_out = t_out
-        self.t_final = float(t_out[-1])
+        self.t_final = float(t_out[-1]) if t_stop is None else min(float(t_out[-1]), t_stop)
         bps = {float(b) for b in breakpoints if np.isfinite(b)}
         if math.isfinite(self.end_time):
             bps.add(self.end_time)
@@ -158,6 +179,10 @@ class _Run:
     def a(self, t: float) -> float:
         return float(self.accel(t))
 
+    def az(self, t: float) -> float:
+        """Vertical base acceleration ü_z(t) (0 without a vertical motion)."""
+        return 0.0 if self.vertical is None else float(self.vertical(t))
+
     def fill(self, ta: float, tb: float, fn: Callable[[np.ndarray], np.ndarray],
              last: bool, p: Pattern) -> None:
         i0 = int(np.searchsorted(self.t_out, ta, "left"))
@@ -171,10 +196,20 @@ class _Run:
             self.patterns.append((t, p.name))
 
     def next_start(self, t: float) -> float | None:
-        """First time ≥ t when |ü_g| exceeds the rest threshold (sampled scan + brentq)."""
+        """First time ≥ t when |ü_g| exceeds the rest threshold (sampled scan + brentq).
+
+        With a vertical motion the threshold is (g + ü_z) min(tan α2, tan αM).
+        """
         thr = self.m.threshold
         if t >= self.end_time:
             return None
+        vert = self.vertical
+        if vert is None:
+            def excess(s: float) -> float:
+                return abs(self.a(s)) - thr
+        else:
+            def excess(s: float) -> float:
+                return abs(self.a(s)) - self.m.threshold_at(self.az(s))
         ta = t
         t_end = min(self.t_final, self.end_time)
         while ta < t_end:
@@ -182,21 +217,27 @@ class _Run:
             n = max(3, int(math.ceil((tb - ta) / 1e-4)) + 1)
             ts = np.linspace(ta, tb, n)
             f = np.abs(np.asarray(self.accel(ts), float)) - thr
+            if vert is not None:
+                f = f - thr * np.asarray(vert(ts), float) / self.m.g
             hit = np.flatnonzero(f > 0)
             if hit.size:
                 i = int(hit[0])
                 if i == 0:
                     return ta
-                return brentq(lambda s: abs(self.a(s)) - thr, ts[i - 1], ts[i],
-                              xtol=1e-15, rtol=8.9e-16)
+                return brentq(excess, ts[i - 1], ts[i], xtol=1e-15, rtol=8.9e-16)
             ta = tb
         return None
 
     # ----------------------------------------------------- right-hand sides
     def rhs(self, p: Pattern) -> Callable[[float, np.ndarray], list[float]]:
+        """The right-hand side of pattern ``p``: with a vertical base acceleration ü_z,
+        gravity g + ü_z and the work of the vertical inertial forces −m_i ü_z (power
+        −ü_z Σ m_i ż_Gi) in z[4]; without one, ü_z = 0 adds exact zeros."""
         m = self.m
         acc = self.accel
+        vert = self.vertical
         g = m.g
+        sin, cos = math.sin, math.cos
         k = p.kind
         if k == "M":
             s = p.base
@@ -204,9 +245,12 @@ class _Run:
 
             def f_m(t: float, z: np.ndarray) -> list[float]:
                 a = float(acc(t))
+                az = float(vert(t)) if vert is not None else 0.0
                 arg = sa - z[0]
-                c = math.cos(arg)
-                return [z[2], 0.0, -pm2 * (math.sin(arg) + a / g * c), 0.0, -a * bm * c * z[2]]
+                c, n = cos(arg), sin(arg)
+                # composite centroid height RM cos(arg): ż = RM sin(arg) θ̇
+                return [z[2], 0.0, -pm2 * ((1.0 + az / g) * n + a / g * c), 0.0,
+                        -a * bm * c * z[2] - az * bm * n * z[2]]
 
             return f_m
         if k == "U":
@@ -215,9 +259,11 @@ class _Run:
 
             def f_u(t: float, z: np.ndarray) -> list[float]:
                 a = float(acc(t))
+                az = float(vert(t)) if vert is not None else 0.0
                 arg = sa - z[1]
-                c = math.cos(arg)
-                return [0.0, z[3], 0.0, -p22 * (math.sin(arg) + a / g * c), -a * bu * c * z[3]]
+                c, n = cos(arg), sin(arg)
+                return [0.0, z[3], 0.0, -p22 * ((1.0 + az / g) * n + a / g * c),
+                        -a * bu * c * z[3] - az * bu * n * z[3]]
 
             return f_u
         s1, s2 = p.base, p.iface
@@ -227,7 +273,6 @@ class _Run:
         ex0, ey0 = -s1 * m.b1, m.h1
         m11 = m.IO1 + m2 * (vx * vx + vy * vy)
         m22 = m.IC2
-        sin, cos = math.sin, math.cos
 
         def f_b(t: float, z: np.ndarray) -> list[float]:
             th1, ph, w1, wp = z[0], z[1], z[2], z[3]
@@ -240,14 +285,20 @@ class _Run:
             m12 = m2 * (cx * dx + cy * dy)
             sd = m2 * (cx * dy - cy * dx)
             a = float(acc(t))
+            az = float(vert(t)) if vert is not None else 0.0
+            ge = g + az
             b1 = m1 * ey + m2 * cy
             b2 = m2 * dy
-            r1 = -a * b1 - sd * w2 * w2 + g * (m1 * ex + m2 * cx)
-            r2 = -a * b2 + sd * w1 * w1 + g * m2 * dx
+            # gravity's generalised forces (the centroid heights ey, cy + dy have
+            # ∂/∂θ1 = −ex, −cx and ∂/∂θ2 = −dx); a downward ü_z acts alike
+            q1 = m1 * ex + m2 * cx
+            r1 = -a * b1 - sd * w2 * w2 + ge * q1
+            r2 = -a * b2 + sd * w1 * w1 + ge * m2 * dx
             det = m11 * m22 - m12 * m12
             d1 = (m22 * r1 - m12 * r2) / det
             d2 = (m11 * r2 - m12 * r1) / det
-            return [w1, wp, d1, d2 - d1, -a * (b1 * w1 + b2 * w2)]
+            return [w1, wp, d1, d2 - d1,
+                    -a * (b1 * w1 + b2 * w2) + az * (q1 * w1 + m2 * dx * w2)]
 
         return f_b
 
@@ -283,13 +334,25 @@ class _Run:
             else:
                 add(lambda t, y, i=idx, s=s: s * y[i] - EPS_ARM, 1.0, f"arm:{label}")
                 add(lambda t, y, i=idx, s=s: s * y[i] + EPS_ARM, -1.0, f"fail:{label}")
-        if p.kind == "M":
+        vert = self.vertical
+        if vert is None:
+            if p.kind == "M":
+                for sg in (1, -1):
+                    add(lambda t, y, sg=sg: m.lambda_if(p.base, sg, y[0], y[2], float(acc(t))),
+                        -1.0, f"uplift:{sg}")
+            elif p.kind == "U":
+                for sg in (1, -1):
+                    add(lambda t, y, sg=sg: m.lambda_b(p.iface, sg, y[1], y[3], float(acc(t))),
+                        -1.0, f"uplift:{sg}")
+        elif p.kind == "M":
             for sg in (1, -1):
-                add(lambda t, y, sg=sg: m.lambda_if(p.base, sg, y[0], y[2], float(acc(t))),
+                add(lambda t, y, sg=sg: m.lambda_if(p.base, sg, y[0], y[2], float(acc(t)),
+                                                    az=float(vert(t))),
                     -1.0, f"uplift:{sg}")
         elif p.kind == "U":
             for sg in (1, -1):
-                add(lambda t, y, sg=sg: m.lambda_b(p.iface, sg, y[1], y[3], float(acc(t))),
+                add(lambda t, y, sg=sg: m.lambda_b(p.iface, sg, y[1], y[3], float(acc(t)),
+                                                   az=float(vert(t))),
                     -1.0, f"uplift:{sg}")
         return evs, names
 
@@ -297,14 +360,14 @@ class _Run:
         """§5.4: switch M/U to B at once if an uplift indicator is already negative."""
         m = self.m
         if p.kind == "M":
-            a = self.a(t)
-            lam = {sg: m.lambda_if(p.base, sg, z[0], z[2], a) for sg in (1, -1)}
+            a, az = self.a(t), self.az(t)
+            lam = {sg: m.lambda_if(p.base, sg, z[0], z[2], a, az=az) for sg in (1, -1)}
             sg = min(lam, key=lam.__getitem__)
             if lam[sg] < 0:
                 return Pattern(p.base, sg)
         elif p.kind == "U":
-            a = self.a(t)
-            lam = {sg: m.lambda_b(p.iface, sg, z[1], z[3], a) for sg in (1, -1)}
+            a, az = self.a(t), self.az(t)
+            lam = {sg: m.lambda_b(p.iface, sg, z[1], z[3], a, az=az) for sg in (1, -1)}
             sg = min(lam, key=lam.__getitem__)
             if lam[sg] < 0:
                 return Pattern(sg, p.iface)
@@ -359,11 +422,15 @@ class _Run:
                     return
                 t = float(tn)
                 a0 = self.a(t)
-                a1 = self.a(t + 1e-9 * max(1.0, t))
-                ap = a1 if abs(a1) > abs(a0) or a0 * a1 < 0 else a0
-                if abs(ap) <= m.threshold * (1 + 1e-9):
-                    ap = math.copysign(m.threshold * (1 + 1e-9), ap if ap != 0 else a0)
-                p = m.start_pattern(ap)
+                t1 = t + 1e-9 * max(1.0, t)
+                a1 = self.a(t1)
+                use1 = abs(a1) > abs(a0) or a0 * a1 < 0
+                ap = a1 if use1 else a0
+                azp = self.az(t1 if use1 else t)
+                thr = m.threshold_at(azp)
+                if abs(ap) <= thr * (1 + 1e-9):
+                    ap = math.copysign(thr * (1 + 1e-9), ap if ap != 0 else a0)
+                p = m.start_pattern(ap, az=azp)
                 z = np.array([0.0, 0.0, 0.0, 0.0, w])
                 continue
             q = self.consistent(t, p, z)
@@ -462,8 +529,9 @@ def solve_two_blocks(
     w_rest: float | None = None,
     max_phases: int = 200000,
     legacy: bool = False,
+    vertical: Callable[[Any], Any] | None = None,
 ) -> TwoBlockSolution:
-    """Rocking response of two stacked rigid blocks on a horizontally moving rigid base.
+    """Rocking response of two stacked rigid blocks on a moving rigid base.
 
     Parameters
     ----------
@@ -476,9 +544,9 @@ def solve_two_blocks(
         Base acceleration ü_g(t) (m/s², positive toward +x). Must accept a float
         and a NumPy array of times.
     breakpoints : sequence of float
-        Times where ü_g is not smooth; the integration restarts there.
+        Times where ü_g (or ü_z) is not smooth; the integration restarts there.
     end_time : float
-        Time after which ü_g ≡ 0 (used to stop waiting at rest).
+        Time after which ü_g ≡ 0 and ü_z ≡ 0 (used to stop waiting at rest).
     theta0, omega0 : tuple of float
         Initial absolute rotations (θ1, θ2) and rates (rad, rad/s). Equal
         rotations mean a rigidly tilted stack (pattern ``M``).
@@ -496,11 +564,18 @@ def solve_two_blocks(
         Maximum number of integration phases (guards chattering).
     legacy : bool
         Simplified impact rule (``M``→``M``, ``U``→``U`` always), for comparison.
+    vertical : callable, optional
+        Vertical base acceleration ü_z(t) (m/s², positive up), like ``accel``
+        (a float and a NumPy array of times); its breakpoints must be in
+        ``breakpoints``. The blocks' weight is then m (g + ü_z). None: the base
+        moves horizontally only.
 
     Returns
     -------
     TwoBlockSolution
-        Sampled response, impacts, pattern history and outcome.
+        Sampled response, impacts, pattern history and outcome; status
+        ``"flight"`` when g + ü_z turns negative (before any overturn): the
+        solution stops there.
     """
     model = TwoBlockModel(lower, upper, g)
     t_out = np.asarray(t_out, float).reshape(-1)
@@ -517,10 +592,30 @@ def solve_two_blocks(
         raise ValueError("pattern R needs a zero initial state")
     if w_rest is None:
         w_rest = 1e-3 * min(model.pM * model.alphaM, model.p2 * model.alpha2)
+    t_flight = None
+    if vertical is not None:
+        # flight_time scans [0, t_end]: shift it to the run's start t_out[0]
+        t0 = float(t_out[0])
+        vz = vertical
+        t_flight = flight_time(lambda t: vz(np.asarray(t, float) + t0),
+                               lambda t: float(vz(t + t0)), model.g,
+                               min(float(end_time), float(t_out[-1])) - t0)
+        if t_flight is not None:
+            t_flight += t0
     run = _Run(model, accel, breakpoints, end_time, t_out, rtol, atol, float(w_rest),
-               int(max_phases), legacy)
+               int(max_phases), legacy, vertical=vertical, t_stop=t_flight)
     z = np.array([th1, th2 - th1, w1, w2 - w1, 0.0])
     run.run(p, z)
+    if t_flight is not None and run.status == "ok":
+        # the stack leaves the ground at t_flight: nothing after it is computed
+        if not np.isfinite(run.y[0, 0]):  # flight from the start
+            run.y[0], run.pat[0] = z, p
+        run.y[int(np.searchsorted(t_out, t_flight, "right")):] = np.nan
+        run.pat[int(np.searchsorted(t_out, t_flight, "right")):] = 0
+        run.status = "flight"
+        run.message = (f"the base falls faster than gravity at t = {t_flight:.6f} s "
+                       f"(g + ü_z < 0): the stack leaves the ground, which the model does "
+                       f"not follow")
     y = run.y
     theta = np.column_stack([y[:, 0], y[:, 0] + y[:, 1]])
     theta_dot = np.column_stack([y[:, 2], y[:, 2] + y[:, 3]])
@@ -528,7 +623,7 @@ def solve_two_blocks(
         t=t_out, theta=theta, theta_dot=theta_dot, status=run.status, impacts=run.impacts,
         patterns=run.patterns, overturn_time=run.t_over, overturned_block=run.over_block,
         message=run.message, work=y[:, 4].copy(), impact_losses=run.losses,
-        n_phases=run.n_phases, contacts=run.pat, model=model,
+        n_phases=run.n_phases, contacts=run.pat, model=model, flight_time=t_flight,
     )
 
 
@@ -555,7 +650,8 @@ def two_block_reference(scenario: Scenario) -> Trajectory:
     """Analytic reference trajectory of a two-block scenario.
 
     The stack starts tilted rigidly by ``scenario.theta0`` (pattern ``M``) or at
-    rest, and is driven by the scenario's base acceleration. Pivots are at the
+    rest, and is driven by the scenario's base acceleration along x and, if
+    the base moves vertically, along z (weight m (g + ü_z)). Pivots are at the
     chamfer corners on the faces (lever arms with ``b − chamfer``), inertia of
     the full boxes.
 
@@ -568,17 +664,21 @@ def two_block_reference(scenario: Scenario) -> Trajectory:
     -------
     rockbench.trajectory.Trajectory
         θ of both blocks, centroid x (including the base displacement u_g) and
-        z in the ground frame, status ``ok`` or ``overturned`` (the samples end
-        at the last output time before the overturn; the message and ``extra``
-        name the overturned block, ``"stack"``, ``"lower"`` or ``"upper"``, and
-        the overturn time), impact times, and ``extra`` with the pattern history
-        and the impacts. A run stopped early (``max_phases``) ends at its last
-        computed sample with status ``timeout``.
+        z (including the base's vertical displacement) in the ground frame,
+        status ``ok`` or ``overturned`` (the samples end at the last output time
+        before the overturn; the message and ``extra`` name the overturned
+        block, ``"stack"``, ``"lower"`` or ``"upper"``, and the overturn time),
+        impact times, and ``extra`` with the pattern history and the impacts. A
+        run stopped early (``max_phases``) ends at its last computed sample with
+        status ``timeout``; where g + ü_z < 0 (the stack leaves the ground, which
+        the model does not follow) the samples end at that time with status
+        ``unsupported`` and a message saying so, as Housner's reference does.
 
     Raises
     ------
     rockbench.errors.UnsupportedScenario
-        If the scenario does not have exactly two centred blocks.
+        If the scenario does not have exactly two centred blocks, or its base
+        moves along y.
     """
     col = scenario.geometry.column
     if col is None or len(col) != 2:
@@ -588,21 +688,26 @@ def two_block_reference(scenario: Scenario) -> Trajectory:
     if not col.centred:
         raise UnsupportedScenario(
             f"two-block reference needs centred blocks (zero offsets), got {col.offsets}")
-    if scenario.motion.axes not in ((), ("x",)):
-        raise UnsupportedScenario("the two-block reference takes a base motion along x only")
+    motion = scenario.motion
+    if "y" in motion.axes:
+        raise UnsupportedScenario("the two-block reference is planar: no base motion along y")
     lo_blk, up_blk = col.blocks
     lower, upper = BlockParams.from_block(lo_blk), BlockParams.from_block(up_blk)
-    exc = scenario.motion.x
+    exc, up = motion.x, motion.z
     accel = _fast_accel(exc)
+    vertical = None if up.is_free else _fast_accel(up)
+    # without a vertical motion: x's own breakpoints and end time, as always
+    breakpoints, end_time = ((exc.breakpoints, exc.end_time) if vertical is None
+                             else (motion.breakpoints, motion.end_time))
     t_out = scenario.output_times()
     th0 = float(scenario.theta0)
     settings: dict[str, Any] = {"method": "DOP853", "rtol": 1e-10, "atol": 1e-12,
                                 "max_phases": 200000, "legacy": False, "eps_arm": EPS_ARM}
     t0 = time.perf_counter()
     sol = solve_two_blocks(
-        lower, upper, g=scenario.g, accel=accel, breakpoints=exc.breakpoints,
-        end_time=exc.end_time, theta0=(th0, th0), t_out=t_out, rtol=settings["rtol"],
-        atol=settings["atol"], max_phases=settings["max_phases"],
+        lower, upper, g=scenario.g, accel=accel, breakpoints=breakpoints,
+        end_time=end_time, theta0=(th0, th0), t_out=t_out, rtol=settings["rtol"],
+        atol=settings["atol"], max_phases=settings["max_phases"], vertical=vertical,
     )
     wall = time.perf_counter() - t0
     model = sol.model
@@ -617,7 +722,10 @@ def two_block_reference(scenario: Scenario) -> Trajectory:
     ug = np.asarray(exc.displacement(t_out), float)
     x = np.column_stack([g1[:, 0] + ug, g2[:, 0] + ug])
     z = np.column_stack([g1[:, 1], g2[:, 1]])
-    status = {"ok": Status.OK, "overturned": Status.OVERTURNED}.get(sol.status, Status.TIMEOUT)
+    if vertical is not None:
+        z = z + np.asarray(up.displacement(t_out), float)[:, None]
+    status = {"ok": Status.OK, "overturned": Status.OVERTURNED,
+              "flight": Status.UNSUPPORTED}.get(sol.status, Status.TIMEOUT)
     msg = sol.message
     if scenario.contact.eta is not None:
         msg = (msg + "; " if msg else "") + "contact.eta ignored (two-block impacts follow " \
@@ -633,5 +741,6 @@ def two_block_reference(scenario: Scenario) -> Trajectory:
             "overturned_block": sol.overturned_block,
             "overturn_time": sol.overturn_time,
             "n_phases": sol.n_phases,
+            **({} if vertical is None else {"flight_time": sol.flight_time}),
         },
     )

@@ -12,6 +12,19 @@ Conventions: the spec's rocking plane (x, y) is rockbench's (x, z); θ is the
 rotation about +y, positive when the top of a block moves toward +x. A positive
 base acceleration tends to produce negative rotations.
 
+Vertical base acceleration ü_z (spec §0: "replace g → g + ü_z everywhere"): in
+the base's frame every block carries the inertial force −m ü_z besides its
+weight, so wherever gravity enters the dynamics — the right-hand sides G of
+pattern ``B`` (§2.5), Housner's equations of ``M`` and ``U`` (§2.3, §2.4), the
+uplift indicators λ_if, λ_b (§3.2, §3.3) and the thresholds and start pattern
+from rest (§3.1) — g becomes g_e = g + ü_z. In the methods below this is the
+keyword ``az`` (m/s², positive up, default 0: the formulas are then exactly
+the horizontal ones). The impact maps (§3.4) do not depend on g and are
+unchanged; :meth:`TwoBlockModel.energy` keeps the potential energy of gravity
+alone (the vertical inertial force does work instead, see
+:mod:`rockbench.analytic.twoblock`). Where g + ü_z < 0 the base falls faster
+than the blocks and they leave it: the model ends there.
+
 Chamfered blocks (rockbench's departure from the spec): the pivots sit at the
 chamfer corners *on* the faces, so every lever arm uses the pivot half-width
 ``b − chamfer`` while the centroidal inertia is that of the full box. With zero
@@ -168,7 +181,9 @@ class TwoBlockModel:
     Attributes follow §1.4 of the spec: ``b1, h1, m1, I1, b2, h2, m2, I2, bc``,
     ``R1, alpha1, IO1, R2, alpha2, IC2, p2, eta2, ybar, RM, alphaM, IOM, pM,
     etaM`` and the static uplift thresholds ``thr_upper = g bc/h2``,
-    ``thr_stack = g b1/ybar`` (m/s²).
+    ``thr_stack = g b1/ybar`` (m/s²), with ``threshold`` the smaller; under a
+    vertical base acceleration ü_z each is multiplied by (g + ü_z)/g
+    (:meth:`threshold_at`).
     """
 
     def __init__(self, lower: BlockParams, upper: BlockParams, g: float = 9.81) -> None:
@@ -197,11 +212,23 @@ class TwoBlockModel:
         self.thr_stack = self.g * b1 / self.ybar
         self.threshold = min(self.thr_upper, self.thr_stack)
 
+    def _ge(self, az: float) -> float:
+        """Effective gravity g + ü_z (exactly ``g`` when ``az`` is 0)."""
+        return self.g + az if az else self.g
+
+    def threshold_at(self, az: float = 0.0) -> float:
+        """Rest threshold of |ü_g| under a vertical base acceleration ``az``:
+        (g + ü_z) min(tan α2, tan αM) (§3.1 with g → g + ü_z)."""
+        return self.threshold * (1.0 + az / self.g) if az else self.threshold
+
     # ------------------------------------------------------------------ EOM
     def matrices_B(
-        self, s1: int, s2: int, th1: float, th2: float, w1: float = 0.0, w2: float = 0.0
+        self, s1: int, s2: int, th1: float, th2: float, w1: float = 0.0, w2: float = 0.0,
+        *, az: float = 0.0,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Mass matrix, C, G and B of pattern ``B(s1,s2)`` (§2.5).
+
+        ``az`` is the vertical base acceleration ü_z: G is that of gravity g + ü_z.
 
         Returns
         -------
@@ -209,7 +236,7 @@ class TwoBlockModel:
         C, G, B : ndarray (2,)
             With ``M q̈ + C + G = −ü_g B``.
         """
-        m1, m2, g = self.m1, self.m2, self.g
+        m1, m2, g = self.m1, self.m2, self._ge(az)
         cx, cy = _rot(s2 * self.bc - s1 * self.b1, 2 * self.h1, th1)
         dx, dy = _rot(-s2 * self.bc, self.h2, th2)
         ex, ey = _rot(-s1 * self.b1, self.h1, th1)
@@ -222,85 +249,100 @@ class TwoBlockModel:
         return mm, cc, gg, bb
 
     def accel_B(
-        self, s1: int, s2: int, th1: float, th2: float, w1: float, w2: float, a: float
+        self, s1: int, s2: int, th1: float, th2: float, w1: float, w2: float, a: float,
+        *, az: float = 0.0,
     ) -> np.ndarray:
         """Absolute accelerations (θ̈1, θ̈2) in pattern ``B(s1,s2)``."""
-        mm, cc, gg, bb = self.matrices_B(s1, s2, th1, th2, w1, w2)
+        mm, cc, gg, bb = self.matrices_B(s1, s2, th1, th2, w1, w2, az=az)
         return np.linalg.solve(mm, -a * bb - cc - gg)
 
-    def accel_M(self, s: int, th: float, a: float) -> float:
-        """θ̈ of the monolithic pattern ``M(s)`` (Housner for the composite body, §2.3)."""
+    def accel_M(self, s: int, th: float, a: float, *, az: float = 0.0) -> float:
+        """θ̈ of the monolithic pattern ``M(s)`` (Housner for the composite body, §2.3):
+        θ̈ = −p_M² [(1 + ü_z/g) sin(s αM − θ) + (ü_g/g) cos(s αM − θ)]."""
         arg = s * self.alphaM - th
+        if az:
+            return -self.pM**2 * ((1.0 + az / self.g) * math.sin(arg)
+                                  + a / self.g * math.cos(arg))
         return -self.pM**2 * (math.sin(arg) + a / self.g * math.cos(arg))
 
-    def accel_U(self, s2: int, th2: float, a: float) -> float:
-        """θ̈2 of pattern ``U(s2)`` (upper block on the resting lower block, §2.4)."""
+    def accel_U(self, s2: int, th2: float, a: float, *, az: float = 0.0) -> float:
+        """θ̈2 of pattern ``U(s2)`` (upper block on the resting lower block, §2.4):
+        θ̈2 = −p2² [(1 + ü_z/g) sin(s2 α2 − θ2) + (ü_g/g) cos(s2 α2 − θ2)]."""
         arg = s2 * self.alpha2 - th2
+        if az:
+            return -self.p2**2 * ((1.0 + az / self.g) * math.sin(arg)
+                                  + a / self.g * math.cos(arg))
         return -self.p2**2 * (math.sin(arg) + a / self.g * math.cos(arg))
 
     def accelerations(
-        self, pattern: Pattern | str, th1: float, th2: float, w1: float, w2: float, a: float
+        self, pattern: Pattern | str, th1: float, th2: float, w1: float, w2: float, a: float,
+        *, az: float = 0.0,
     ) -> tuple[float, float]:
-        """Absolute accelerations (θ̈1, θ̈2) in any pattern."""
+        """Absolute accelerations (θ̈1, θ̈2) in any pattern (``az``: vertical ü_z)."""
         p = parse_pattern(pattern)
         k = p.kind
         if k == "R":
             return 0.0, 0.0
         if k == "M":
-            dd = self.accel_M(p.base, th1, a)
+            dd = self.accel_M(p.base, th1, a, az=az)
             return dd, dd
         if k == "U":
-            return 0.0, self.accel_U(p.iface, th2, a)
-        d1, d2 = self.accel_B(p.base, p.iface, th1, th2, w1, w2, a)
+            return 0.0, self.accel_U(p.iface, th2, a, az=az)
+        d1, d2 = self.accel_B(p.base, p.iface, th1, th2, w1, w2, a, az=az)
         return float(d1), float(d2)
 
     # ------------------------------------------------------ uplift indicators
-    def lambda_if(self, s: int, sigma: int, th: float, w: float, a: float) -> float:
-        """Interface uplift indicator λ_if(σ) during ``M(s)`` (§3.2), N·m."""
-        m2, g = self.m2, self.g
+    def lambda_if(self, s: int, sigma: int, th: float, w: float, a: float,
+                  *, az: float = 0.0) -> float:
+        """Interface uplift indicator λ_if(σ) during ``M(s)`` (§3.2, gravity g + ``az``), N·m."""
+        m2, g = self.m2, self._ge(az)
         cx, cy = _rot(sigma * self.bc - s * self.b1, 2 * self.h1, th)
         dx, dy = _rot(-sigma * self.bc, self.h2, th)
         m12 = m2 * (cx * dx + cy * dy)
         sd = cx * dy - cy * dx
-        ddm = self.accel_M(s, th, a)
+        ddm = self.accel_M(s, th, a, az=az)
         return sigma * ((m12 + self.IC2) * ddm - m2 * sd * w * w - g * m2 * dx + a * m2 * dy)
 
-    def lambda_b(self, s2: int, sigma: int, th2: float, w2: float, a: float) -> float:
-        """Base uplift indicator λ_b(σ) during ``U(s2)`` (§3.3), N·m."""
-        m1, m2, g = self.m1, self.m2, self.g
+    def lambda_b(self, s2: int, sigma: int, th2: float, w2: float, a: float,
+                 *, az: float = 0.0) -> float:
+        """Base uplift indicator λ_b(σ) during ``U(s2)`` (§3.3, gravity g + ``az``), N·m."""
+        m1, m2, g = self.m1, self.m2, self._ge(az)
         cx, cy = s2 * self.bc - sigma * self.b1, 2 * self.h1
         dx, dy = _rot(-s2 * self.bc, self.h2, th2)
         ex, ey = -sigma * self.b1, self.h1
         m12 = m2 * (cx * dx + cy * dy)
         sd = cx * dy - cy * dx
-        ddu = self.accel_U(s2, th2, a)
+        ddu = self.accel_U(s2, th2, a, az=az)
         return sigma * (m12 * ddu + m2 * sd * w2 * w2 - g * (m1 * ex + m2 * cx)
                         + a * (m1 * ey + m2 * cy))
 
     # ----------------------------------------------------- start from rest
-    def start_pattern(self, a: float) -> Pattern:
+    def start_pattern(self, a: float, *, az: float = 0.0) -> Pattern:
         """Pattern that starts from rest under a base acceleration ``a`` (§3.1).
 
-        Returns ``R`` when ``|a|`` does not exceed ``g min(tan α2, tan αM)``;
-        otherwise the unique consistent candidate (the one with the smallest
-        violation of the consistency conditions, for robustness at ties).
+        Returns ``R`` when ``|a|`` does not exceed ``(g + az) min(tan α2, tan αM)``
+        (``az``: the vertical base acceleration ü_z); otherwise the unique
+        consistent candidate (the one with the smallest violation of the
+        consistency conditions, for robustness at ties).
         """
-        if abs(a) <= self.threshold:
+        if abs(a) <= self.threshold_at(az):
             return Pattern(0, 0)
         best, best_v = Pattern(0, 0), math.inf
         scale_m = self.mt * self.g * self.RM
         for p in self.candidates_from_rest():
             viol: list[float] = []
             if p.kind == "M":
-                dd = self.accel_M(p.base, 0.0, a)
+                dd = self.accel_M(p.base, 0.0, a, az=az)
                 viol.append(-p.base * dd / self.pM**2)
-                viol += [-self.lambda_if(p.base, sg, 0.0, 0.0, a) / scale_m for sg in (1, -1)]
+                viol += [-self.lambda_if(p.base, sg, 0.0, 0.0, a, az=az) / scale_m
+                         for sg in (1, -1)]
             elif p.kind == "U":
-                dd = self.accel_U(p.iface, 0.0, a)
+                dd = self.accel_U(p.iface, 0.0, a, az=az)
                 viol.append(-p.iface * dd / self.p2**2)
-                viol += [-self.lambda_b(p.iface, sg, 0.0, 0.0, a) / scale_m for sg in (1, -1)]
+                viol += [-self.lambda_b(p.iface, sg, 0.0, 0.0, a, az=az) / scale_m
+                         for sg in (1, -1)]
             else:
-                d1, d2 = self.accel_B(p.base, p.iface, 0.0, 0.0, 0.0, 0.0, a)
+                d1, d2 = self.accel_B(p.base, p.iface, 0.0, 0.0, 0.0, 0.0, a, az=az)
                 viol += [-p.base * d1 / self.pM**2, -p.iface * (d2 - d1) / self.p2**2]
             v = max(0.0, *viol)
             if v < best_v:
