@@ -159,6 +159,31 @@ def _first_past_90(traj: Trajectory) -> tuple[int, int] | None:
     return i, int(np.argmax(past[i]))
 
 
+def _turns(traj: Trajectory) -> np.ndarray:
+    """Each block's rotation between successive samples (rad, about any axis), from θ, the
+    roll and the twist: θ alone is ill-defined for a block falling about x.
+
+    The orientation is rebuilt as the swing that takes z to the body's z axis,
+    b ∝ sgn(R₂₂) (tan θ, −tan roll, 1) (θ and the roll share R₂₂'s sign), after the twist
+    about z; the rotation between two is 2 acos |q₀ · q₁|.
+    """
+    th, roll = traj.theta, traj.roll
+    sign = np.where(np.cos(th) < 0.0, -1.0, 1.0)
+    b = sign[..., None] * np.stack([np.tan(th), -np.tan(roll), np.ones_like(th)], axis=-1)
+    b /= np.linalg.norm(b, axis=-1, keepdims=True)
+    half = 0.5 * np.arccos(np.clip(b[..., 2], -1.0, 1.0))
+    across = np.hypot(b[..., 0], b[..., 1])
+    scale = np.divide(np.sin(half), across, out=np.zeros_like(across), where=across > 0.0)
+    # swing (cos h, −b_y s, b_x s, 0) times twist (cos t, 0, 0, sin t)
+    sw = np.stack([np.cos(half), -b[..., 1] * scale, b[..., 0] * scale,
+                   np.zeros_like(half)], axis=-1)
+    c, s = np.cos(0.5 * traj.twist), np.sin(0.5 * traj.twist)
+    q = np.stack([sw[..., 0] * c - sw[..., 3] * s, sw[..., 1] * c + sw[..., 2] * s,
+                  sw[..., 2] * c - sw[..., 1] * s, sw[..., 3] * c + sw[..., 0] * s], axis=-1)
+    dot = np.abs(np.sum(q[1:] * q[:-1], axis=-1))
+    return 2.0 * np.arccos(np.clip(dot, 0.0, 1.0))
+
+
 def _check_physical(traj: Trajectory, scenario: Scenario) -> Trajectory:
     """``traj``, or a copy cut at its first NaN or non-physical speed with status unstable."""
     bad = ~np.all(np.isfinite(traj.theta), axis=1)
@@ -173,7 +198,9 @@ def _check_physical(traj: Trajectory, scenario: Scenario) -> Trajectory:
         return traj
     bound = SpeedBound.for_scenario(scenario)
     dt = np.diff(traj.t)
-    spin = np.abs(np.diff(np.unwrap(traj.theta, axis=0), axis=0)) / dt[:, None]
+    turn = (np.abs(np.diff(np.unwrap(traj.theta, axis=0), axis=0)) if traj.planar
+            else _turns(traj))
+    spin = turn / dt[:, None]
     fast = np.any(spin > bound.omega_max, axis=1)
     if np.any(known):
         dx = np.diff(traj.x[:, known], axis=0)
@@ -185,8 +212,7 @@ def _check_physical(traj: Trajectory, scenario: Scenario) -> Trajectory:
     xz = None
     if np.all(known):
         xz = np.column_stack([traj.x[k + 1] - traj.x[k], traj.z[k + 1] - traj.z[k]])
-    dtheta = np.diff(np.unwrap(traj.theta[k:k + 2], axis=0), axis=0)[0]
-    msg = bound.violation(float(dt[k]), xz, dtheta) or "explosion: non-physical speed"
+    msg = bound.violation(float(dt[k]), xz, turn[k]) or "explosion: non-physical speed"
     return _cut(traj, k + 1, Status.UNSTABLE, f"{msg} at t = {traj.t[k + 1]:.4g} s")
 
 

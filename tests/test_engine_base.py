@@ -6,6 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
+from rockbench.bounds import check_trajectory
 from rockbench.engines import (
     Capabilities,
     Engine,
@@ -21,12 +22,12 @@ from rockbench.engines import (
     resolve_engine_names,
     unregister,
 )
-from rockbench.engines.base import Watchdog
+from rockbench.engines.base import OVERTURN_MARGIN, Watchdog
 from rockbench.engines.drive import BaseDrive
 from rockbench.errors import EngineUnavailable, UnknownEngine
 from rockbench.geometry import Geometry, Support, stack
 from rockbench.scenarios import Block, Scenario, SinePulse
-from rockbench.trajectory import Status
+from rockbench.trajectory import Status, Trajectory
 
 
 @dataclass(frozen=True)
@@ -308,3 +309,42 @@ def test_the_watchdog_stops_a_run_where_unmodelled_bodies_overlap() -> None:
         assert found is not None and f"{what} overlap by 0.01 m" in found[1][1], found
     # pairs the engine models are not watched
     assert Watchdog(sc, drive).check(chunk, np.arange(1, 5) * 0.1) is None
+
+
+def _falling_about_x(n: int, rate: float, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """Poses of B (0.5 × 0.2 × 1 m) turning about its −y bottom edge at ``rate`` rad/s,
+    sampled every ``h`` s, with a hint of θ so that R₀₂ is not exactly 0."""
+    t = np.arange(n) * h
+    phi = rate * t  # about +x: the top moves toward −y
+    th = 1e-4
+    q = np.zeros((n, 1, 7))
+    cy, sy = math.cos(th / 2), math.sin(th / 2)
+    # about x by φ, after a tiny θ about y
+    q[:, 0, 3] = np.cos(phi / 2) * cy
+    q[:, 0, 4] = np.sin(phi / 2) * cy
+    q[:, 0, 5] = np.cos(phi / 2) * sy
+    q[:, 0, 6] = -np.sin(phi / 2) * sy
+    # the centroid (0.1 m from the edge across, 0.5 m up) turns about the edge at y = −0.1
+    q[:, 0, 1] = -0.1 + 0.1 * np.cos(phi) - 0.5 * np.sin(phi)
+    q[:, 0, 2] = 0.1 * np.sin(phi) + 0.5 * np.cos(phi)
+    return q, t
+
+
+def test_a_block_falling_about_x_is_overturned_not_unstable():
+    # θ = atan2(R02, R22) swings wildly as R22 → 0 in a fall about x; the rotation per
+    # sample is measured about any axis (2 acos |q0 · q1|), so the watchdog and the
+    # trajectory check both see a fall at a physical rate, then the overturn
+    # (a shaken base: the turn is driven, no energy bound applies)
+    sc = Scenario("fall", B, excitation=SinePulse(5.0, 1e-4), duration=2.0, output_rate=100.0)
+    drive = BaseDrive(sc.motion, sc.duration)
+    poses, t = _falling_about_x(200, 1.5, 0.01)
+    j, (status, message) = Watchdog(sc, drive).check(poses, t[1:])
+    assert status is Status.OVERTURNED and "overturned" in message
+    # the sample where the tilt first reaches π/2 − OVERTURN_MARGIN
+    assert 1.5 * t[j + 1] == pytest.approx(math.pi / 2 - OVERTURN_MARGIN, abs=0.015)
+    o = orientation_from_quaternions(poses[: j + 2, :, 3:])
+    traj = Trajectory(t=t[: j + 2], theta=o.theta, x=poses[: j + 2, :, 0],
+                      z=poses[: j + 2, :, 2], wobble=o.wobble, y=poses[: j + 2, :, 1],
+                      roll=o.roll, twist=o.twist, status=Status.OVERTURNED)
+    assert np.max(np.abs(np.diff(traj.theta[:, 0]))) > 0.1  # θ itself jumps
+    assert check_trajectory(traj, sc) is traj  # nothing non-physical about it

@@ -618,7 +618,9 @@ class Watchdog:
         self.h = 1.0 / scenario.output_rate
         self.move2 = (self.bound.v_max * self.h) ** 2
         self.turn = self.bound.omega_max * self.h
-        self.cos_turn = math.cos(min(self.turn, math.pi))
+        # the rotation between two samples is 2 acos |q0 · q1| (any axis): within the bound
+        # when |q0 · q1| ≥ cos(bound / 2)
+        self.cos_half_turn = math.cos(0.5 * min(self.turn, math.pi))
 
     def check(self, poses: np.ndarray, t: np.ndarray) -> tuple[int, tuple[Status, str]] | None:
         """First failing sample of a chunk (index within the chunk, verdict), or None.
@@ -642,21 +644,22 @@ class Watchdog:
             # the orientation relative to the block's own at rest: q · rot_y(−θ_rest)
             c, s = np.cos(self.half_turn0), np.sin(self.half_turn0)
             w, qx, qy, qz = w * c + qy * s, qx * c + qz * s, qy * c - w * s, qz * c - qx * s
-        # θ = atan2(R02, R22) with both halved (R22 = cos θ / 2 about y): overturned when
-        # |θ| ≥ π/2 − OVERTURN_MARGIN, i.e. R22 ≤ sin(margin)/2
+        # R22/2 (R22 = cos of the tilt, about any axis): overturned when the tilt reaches
+        # π/2 − OVERTURN_MARGIN, i.e. R22 ≤ sin(margin), as |θ| does in a planar run
         r22 = 0.5 - (qx * qx + qy * qy)
-        theta = np.arctan2(qx * qz + w * qy, r22)
         dx, dz = x[1:] - x[:-1], z[1:] - z[:-1]
         move2 = dx * dx + dz * dz
-        # rotation per sample wrapped to [0, π] beyond the bound: cos(Δθ) below cos(bound)
-        cos_turn = np.cos(theta[1:] - theta[:-1])
+        # the rotation per sample about any axis (θ alone is ill-defined for a block falling
+        # about x, whose R02 and R22 both vanish): cos of its half, |q0 · q1|
+        cos_half = np.abs(w[1:] * w[:-1] + qx[1:] * qx[:-1] + qy[1:] * qy[:-1]
+                          + qz[1:] * qz[:-1])
         r22, x, z = r22[1:], x[1:], z[1:]
         far2 = (x - self.x0) ** 2 + (z - self.z0) ** 2
         height = z @ self.masses if self.free else None
         # (array methods: np.max's Python wrapper costs as much as the reduction)
         # (y enters no bound: a sum that NaN or infinity makes non-finite covers it)
         overlap = self.overlaps.first(poses[1:], t) if self.overlaps is not None else None
-        if (move2.max() <= self.move2 and cos_turn.min() >= self.cos_turn
+        if (move2.max() <= self.move2 and cos_half.min() >= self.cos_half_turn
                 and r22.min() > _R22_OVER and far2.max() <= self.reach2
                 and (height is None or height.max() <= self.z_limit)
                 and math.isfinite(poses[1:, :, 1].sum())) and overlap is None:
@@ -664,7 +667,7 @@ class Watchdog:
         # the same quantities sample by sample, for the first offence and its reason
         finite = np.isfinite(poses[1:]).all(axis=(1, 2))
         far = (far2 > self.reach2).any(axis=1)
-        fast = ((move2 > self.move2) | (cos_turn < self.cos_turn)).any(axis=1)
+        fast = ((move2 > self.move2) | (cos_half < self.cos_half_turn)).any(axis=1)
         over = r22 <= _R22_OVER
         gain = height > self.z_limit if height is not None else np.zeros(len(t), bool)
         bad = ~finite | far | fast | over.any(axis=1) | gain
@@ -680,7 +683,7 @@ class Watchdog:
             status, what = Status.UNSTABLE, "explosion: a block left the scene"
         elif fast[j]:
             dxz = np.column_stack([dx[j], dz[j]])
-            turn = np.arccos(np.clip(cos_turn[j], -1.0, 1.0))
+            turn = 2.0 * np.arccos(np.clip(cos_half[j], 0.0, 1.0))
             status = Status.UNSTABLE
             what = self.bound.violation(self.h, dxz, turn) or "explosion: non-physical speed"
         elif over[j].any():
