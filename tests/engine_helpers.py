@@ -169,6 +169,29 @@ def check_rocks_about_x_like_housner(engine: Engine, *, shape_tol: float = 0.01,
     assert np.max(np.abs(tr.theta)) < plane_tol and np.max(np.abs(tr.x)) < plane_tol
 
 
+def check_mirrored_release(engine: Engine, atol: float = 1e-4) -> Trajectory:
+    """B2 released from ±0.5 λ (0.4 s, ``fast``): θ > 0 pivots on the +x edge, and the −tilt
+    run mirrors the +tilt run within ``atol`` (rad and m). Returns the +tilt run."""
+    pos = engine.simulate(Scenario("free", B2, initial_tilt=0.5, duration=0.4), "fast")
+    neg = engine.simulate(Scenario("free", B2, initial_tilt=-0.5, duration=0.4), "fast")
+    assert pos.theta[0, 0] > 0 and pos.x[0, 0] > 0
+    np.testing.assert_allclose(neg.theta, -pos.theta, atol=atol)
+    np.testing.assert_allclose(neg.x, -pos.x, atol=atol)
+    return pos
+
+
+def check_pulse_rocks_without_overturning(engine: Engine, rel: float = 0.01) -> None:
+    """Single #2 under the 3 Hz / 8 mm pulse rocks to 0.3–1 λ without overturning, its peak
+    within ``rel`` of Housner's (the ``accurate`` preset)."""
+    sc = get_scenario("single-pulse-3.0hz-8mm")
+    ref = reference(sc)
+    tr = engine.simulate(sc, "accurate")
+    assert tr.status is ref.status is Status.OK
+    peak, peak_ref = np.max(np.abs(tr.theta)), np.max(np.abs(ref.theta))
+    assert 0.3 * lam(sc) < peak < lam(sc)
+    assert peak == pytest.approx(peak_ref, rel=rel)
+
+
 def check_paper_stack_under_pulse_runs(engine: Engine) -> None:
     """The paper's two-block stack under a 3.3 Hz / 4 mm pulse (fast preset) runs,
     stays finite and travels with the base."""
