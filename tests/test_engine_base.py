@@ -1,6 +1,7 @@
 """The Engine template method: sampling, driving, status detection, settings, registry."""
 
 import math
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,7 +23,7 @@ from rockbench.engines import (
     resolve_engine_names,
     unregister,
 )
-from rockbench.engines.base import OVERTURN_MARGIN, Watchdog
+from rockbench.engines.base import OVERTURN_MARGIN, Watchdog, install_hint
 from rockbench.engines.drive import BaseDrive
 from rockbench.errors import EngineUnavailable, UnknownEngine
 from rockbench.geometry import Geometry, Support, stack
@@ -348,3 +349,16 @@ def test_a_block_falling_about_x_is_overturned_not_unstable():
                       roll=o.roll, twist=o.twist, status=Status.OVERTURNED)
     assert np.max(np.abs(np.diff(traj.theta[:, 0]))) > 0.1  # θ itself jumps
     assert check_trajectory(traj, sc) is traj  # nothing non-physical about it
+
+
+def test_the_install_hint_names_the_python_an_extra_needs():
+    # Box2D's and Jolt's wheels exist for Python >= 3.12, bpy 5.0 for 3.11 only: their
+    # extras install nothing elsewhere, and the hint says so (from rockbench's metadata)
+    here = sys.version_info[:2]
+    for extra, module in (("box2d", "box2d"), ("jolt", "culverin")):
+        hint = install_hint(extra, module)
+        assert hint.startswith(f"pip install 'rockbench[{extra}]'")
+        assert ("under Python ≥ 3.12" in hint) == (here < (3, 12)), hint
+    assert ("under Python 3.11 (this is" in install_hint("blender", "bpy")) == (here != (3, 11))
+    assert install_hint("mujoco", "mujoco") == "pip install 'rockbench[mujoco]'"
+    assert install_hint("", "thelib") == "pip install thelib"

@@ -77,7 +77,11 @@ Contract for implementers (the numbered rules that every plugin follows)
 from __future__ import annotations
 
 import importlib
+import importlib.metadata
 import math
+import operator
+import re
+import sys
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
@@ -103,8 +107,44 @@ __all__ = ["Engine", "Capabilities", "angles_from_quaternions", "install_hint", 
 
 
 def install_hint(extra: str, module: str) -> str:
-    """The command that installs an engine's library: its rockbench extra, or else the module."""
-    return f"pip install 'rockbench[{extra}]'" if extra else f"pip install {module}"
+    """The command that installs an engine's library: its rockbench extra, or else the module.
+
+    An extra whose packages exist for other Pythons only (Blender's bpy: 3.11; Box2D's and
+    Jolt's wheels: ≥ 3.12) installs nothing here, so the hint says which Python it needs.
+    """
+    if not extra:
+        return f"pip install {module}"
+    hint = f"pip install 'rockbench[{extra}]'"
+    need = _python_of_extra(extra)
+    here = f"{sys.version_info.major}.{sys.version_info.minor}"
+    return hint if need is None else f"{hint} under Python {need} (this is Python {here})"
+
+
+#: A requirement's Python condition in rockbench's metadata: python_version >= "3.12".
+_PYTHON_MARKER = re.compile(r'python_version\s*(==|>=|<=|<|>)\s*"(\d+)\.(\d+)"')
+_COMPARE = {"==": operator.eq, ">=": operator.ge, "<=": operator.le, "<": operator.lt,
+            ">": operator.gt}
+
+
+def _python_of_extra(extra: str) -> str | None:
+    """The Python an extra's packages need (e.g. ``">= 3.12"``) when it is not this one;
+    None when they install here, or when rockbench's metadata cannot tell."""
+    try:
+        requires = importlib.metadata.requires("rockbench") or []
+    except importlib.metadata.PackageNotFoundError:  # a source tree never installed
+        return None
+    for req in requires:
+        if f'extra == "{extra}"' not in req:
+            continue
+        found = _PYTHON_MARKER.search(req)
+        if found is None:
+            return None
+        op, major, minor = found.group(1), int(found.group(2)), int(found.group(3))
+        if not _COMPARE[op](sys.version_info[:2], (major, minor)):
+            sign = {">=": "≥ ", "<=": "≤ ", "==": ""}.get(op, f"{op} ")
+            return f"{sign}{major}.{minor}"
+        return None
+    return None
 
 
 def require_library(module: str, *, engine: str, extra: str = "") -> ModuleType:
