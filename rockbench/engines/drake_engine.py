@@ -9,12 +9,16 @@ prism) is cut along y into ``collision_slices`` slices, since Drake's point cont
 gives one point per pair of shapes. With ``corner_radius`` (the default) small spheres
 at the corners of every slice carry the contact instead, so that every corner has its
 own point. The ground is a ``Box`` whose top face is z = 0: welded in free rocking,
-otherwise a heavy body on a prismatic joint along x whose position and velocity are
-overwritten before every step with u(t) and v(t + φ dt) (φ = ``base_velocity_phase``),
-held still once the motion ends, so that steps are batched in C++. The base motion is
-applied along x only. Fixed supports are shapes of the ground's body with corners of
-their own. Friction is Coulomb's (static = dynamic), combined harmonically per pair
-(:func:`harmonic_frictions`, :func:`assembly_harmonic_frictions`); the point-contact
+otherwise a heavy body on a prismatic joint per axis along which the base moves
+(chained, weightless, a force along z cancelling the blocks' weight; a motion along x
+alone keeps the planar benchmark's single joint along x, bit for bit), whose positions
+and velocities are overwritten before every step with u(t) and v(t + φ dt)
+(φ = ``base_velocity_phase``), held still once the motion ends, so that steps are
+batched in C++. The base motion is applied along x, y and z; off the x axis every block
+also has corner spheres at its y faces, on which it rocks about x. Fixed supports are
+shapes of the ground's body with corners of their own. Friction is Coulomb's (static =
+dynamic), combined harmonically per pair (:func:`harmonic_frictions`,
+:func:`assembly_harmonic_frictions`); the point-contact
 stiffness comes from ``static_penetration`` (or ``point_stiffness``), the dissipation
 from ``hunt_crossley_dissipation`` (or SAP's ``relaxation_time``). Drake has no
 restitution coefficient, no damping and no sleeping.
@@ -46,6 +50,7 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from rockbench.engines.base import Capabilities, Engine
+from rockbench.engines.drive import AXIS
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
 from rockbench.geometry import Block, Support
@@ -67,6 +72,8 @@ _log = logging.getLogger(__name__)
 _BASE_MASS_RATIO = 1.0e6
 #: Excitation samples precomputed per chunk (bounded memory for long records).
 _CHUNK = 20000
+#: Unit vector of each axis (the base's prismatic joints).
+_UNIT = {"x": [1.0, 0.0, 0.0], "y": [0.0, 1.0, 0.0], "z": [0.0, 0.0, 1.0]}
 
 
 @dataclass(frozen=True)
@@ -91,7 +98,8 @@ class DrakeSettings(EngineSettings):
         whole stack's weight W on one rocking edge: each geometry gets
         ``material/point_contact_stiffness`` = 2W/(Nδ) with N =
         ``collision_slices`` (two equal springs in series give W/δ over the N
-        contacts of a rocking edge). Scaling with the weight keeps the contact time scale
+        contacts of a rocking edge; N + 2 with the y faces' corner spheres of a base
+        that leaves the x axis). Scaling with the weight keeps the contact time scale
         sqrt(δ/g) the same for every block. Ignored if ``point_stiffness`` is set.
     point_stiffness : float or None
         Absolute point-contact stiffness in N/m of every geometry (overrides
@@ -134,7 +142,8 @@ class DrakeSettings(EngineSettings):
     corner_radius : float or None
         None: the block's shape (box or prism slices) is its collision geometry.
         A radius r in m: spheres of radius r at the profile's vertices (inset to touch
-        both edges there), one set per slice, are the contact geometry instead: each
+        both edges there), one set per slice (and, when the base moves along y or z,
+        one more at each y face: :func:`corner_ys`), are the contact geometry instead: each
         sphere is its own pair, so a face resting on the ground or on another block
         is held at both its corners. Point contact only.
 
@@ -250,6 +259,20 @@ def _add_corners(plant: Any, body: Any, profile: np.ndarray, y: float, r: float,
             for k, (x, z) in enumerate(corner_centres(profile, r))]
 
 
+def corner_ys(depth: float, n: int, r: float, *, ends: bool) -> list[float]:
+    """The y of each set of corner spheres of a body ``depth`` deep cut into ``n`` slices:
+    the slices' centres and, with ``ends`` (a base that also moves along y or z), one set
+    more at each y face (±(depth/2 − r), touching it), so that an edge along x rests on a
+    sphere at each of its corners as an edge along y does, and the block rocks about x on
+    its faces' edges. The centres stay: they are what holds a block on a narrower one."""
+    d = depth / n
+    ys = [(j + 0.5) * d - 0.5 * depth for j in range(n)]
+    if ends:
+        h = 0.5 * depth - r
+        ys = [-h, *ys, h]
+    return ys
+
+
 def assembly_harmonic_frictions(mu: float, mu_if: float, n_blocks: int) -> list[float]:
     """Per-geometry coefficients (base and supports first) for a geometry that is not a column.
 
@@ -287,7 +310,7 @@ class DrakeEngine(Engine):
 
     name: ClassVar[str] = "drake"
     capabilities: ClassVar[Capabilities] = Capabilities(
-        dimensions=3, max_blocks=None, chamfer=True, assemblies=True)
+        dimensions=3, max_blocks=None, chamfer=True, assemblies=True, base_axes="xyz")
     Settings: ClassVar[type[EngineSettings]] = DrakeSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
@@ -370,6 +393,10 @@ class DrakeEngine(Engine):
         geo = scenario.geometry
         blocks = scenario.blocks
         drive = self.drive
+        # a base moving along x only keeps the planar benchmark's model, bit for bit: one
+        # prismatic joint along x, corner spheres at the slices' centres
+        planar = drive.axes == ("x",)
+        ends = drive.moving and not planar
         builder = DiagramBuilder()
         cfg = MultibodyPlantConfig(
             time_step=s.timestep, contact_model=s.contact_model,
@@ -383,9 +410,11 @@ class DrakeEngine(Engine):
         mu = scenario.contact.friction
         k = s.point_stiffness
         n_sl = s.collision_slices
+        # contacts along a rocking edge (x: n_sl, or n_sl + 2 with the y faces' spheres)
+        n_pts = n_sl + 2 if ends and s.corner_radius is not None else n_sl
         if k is None and s.static_penetration is not None:
-            # the weight is shared by the n_sl slices' contacts along the rocking edge
-            k = 2.0 * sum(b.m for b in blocks) * scenario.g / (n_sl * s.static_penetration)
+            # the weight is shared by the n_pts contacts along the rocking edge
+            k = 2.0 * sum(b.m for b in blocks) * scenario.g / (n_pts * s.static_penetration)
         # a column's blocks touch only the ones below and above them (alternating
         # coefficients); any other geometry's may touch other blocks and the base at once
         combine = harmonic_frictions if geo.column is not None else assembly_harmonic_frictions
@@ -413,7 +442,11 @@ class DrakeEngine(Engine):
                 y = (j + 0.5) * d - 0.5 * blk.depth
                 shapes.append(plant.RegisterCollisionGeometry(
                     body, RigidTransform([0.0, y, 0.0]), shape, f"geom{i}_{j}", p_block))  # type: ignore[call-overload]  # pydrake stub mistypes vectors
-                if r is not None:
+                if r is not None and not ends:
+                    corners += _add_corners(plant, body, blk.profile(), y, r, p_block,
+                                            f"corner{i}_{j}")
+            if r is not None and ends:
+                for j, y in enumerate(corner_ys(blk.depth, n_sl, r, ends=True)):
                     corners += _add_corners(plant, body, blk.profile(), y, r, p_block,
                                             f"corner{i}_{j}")
             bodies.append(body)
@@ -423,14 +456,18 @@ class DrakeEngine(Engine):
         lx = 2.0 * (2.0 * ext + 2.0 * drive.travel + 1.0)
         ly = 2.0 * (2.0 * max(b.depth for b in blocks) + 0.5)
         lz = 2.0 * (0.25 * ext + 0.1)
+        if "y" in drive.axes:  # as wide as long: the base travels, the blocks rock along y
+            ly = max(ly, lx)
         ground = Box(lx, ly, lz)
         x_ground = RigidTransform([0.0, 0.0, -0.5 * lz])  # type: ignore[call-overload]  # pydrake stub mistypes vectors
         self._joint = None
+        self._joints: list[Any] = []  # the base's prismatic joints, one per moving axis
+        self._hold = 0.0
         if not drive.moving:
             anchor = plant.world_body()  # the body of the ground and supports
             ground_id = plant.RegisterCollisionGeometry(anchor, x_ground, ground, "ground",
                                                         p_ground)
-        else:
+        elif planar:
             mb = _BASE_MASS_RATIO * sum(b.m for b in blocks)
             # the inertia is irrelevant (the base only slides) but must be valid
             base = plant.AddRigidBody("base", SpatialInertia(
@@ -442,16 +479,25 @@ class DrakeEngine(Engine):
             self._joint = plant.AddJoint(PrismaticJoint(
                 "slide", plant.world_frame(), base.body_frame(), [1.0, 0.0, 0.0],  # type: ignore[arg-type]  # pydrake stub mistypes vectors
                 -math.inf, math.inf, 0.0))
+            self._joints = [self._joint]
+        else:
+            anchor, self._joints = self._add_base_chain(plant, drive.axes, sum(b.m for b in blocks),
+                                                        lx, ly, lz)
+            ground_id = plant.RegisterCollisionGeometry(anchor, x_ground, ground, "ground",
+                                                        p_ground)
+            # the base has no weight (gravity off on its model instance) and a force along z
+            # that cancels the blocks' weight on it: no net vertical force on base and
+            # blocks, so the blocks' weight does not push the base down once it stands still
+            # (TAMSI ignores locks), only their centroids' motion moves it, by 1e-6 of it
+            self._hold = sum(b.m for b in blocks) * scenario.g if "z" in drive.axes else 0.0
         # the geometry's supports: shapes of the ground's body (welded to the moving base)
         depth = max(b.depth for b in blocks)
         for k_s, sup in enumerate(geo.supports):
             shapes.append(self._add_support(plant, anchor, sup, depth, p_ground,
                                             f"support{k_s}"))
             if r is not None:  # its corners on block faces, as the blocks' on its faces
-                d = depth / n_sl
-                for j in range(n_sl):
-                    corners += _add_corners(plant, anchor, sup.array,
-                                            (j + 0.5) * d - 0.5 * depth, r, p_ground,
+                for j, y in enumerate(corner_ys(depth, n_sl, r, ends=ends)):
+                    corners += _add_corners(plant, anchor, sup.array, y, r, p_ground,
                                             f"support{k_s}_corner{j}")
         plant.Finalize()
         if r is not None:
@@ -469,6 +515,10 @@ class DrakeEngine(Engine):
         for body, (cx, cz, a) in zip(bodies, scenario.initial_poses(), strict=True):
             plant.SetFreeBodyPose(pc, body, RigidTransform(RotationMatrix.MakeYRotation(a),  # type: ignore[call-overload]  # pydrake stub mistypes vectors
                                                            [cx, 0.0, cz]))
+        if self._hold:
+            tau = np.zeros(plant.num_velocities())
+            tau[self._joints[-1].velocity_start()] = self._hold
+            plant.get_applied_generalized_force_input_port().FixValue(pc, tau)
         sim.Initialize()
         # discrete state = [q; v]; a free body's q is (qw, qx, qy, qz, x, y, z)
         self._state = pc.get_discrete_state(0)
@@ -484,7 +534,32 @@ class DrakeEngine(Engine):
         self._phase = s.base_velocity_phase
         self._sap = s.contact_approximation != "tamsi"
         self._chunk_start = -1
+        self._planar = planar
+        self._cols = [AXIS[a] for a in drive.axes]
         return self._dt
+
+    @staticmethod
+    def _add_base_chain(plant: Any, axes: tuple[str, ...], m_blocks: float, lx: float,
+                        ly: float, lz: float) -> tuple[Any, list[Any]]:
+        """The base of a motion that leaves the x axis: one prismatic joint per moving axis
+        (x, y, z order), chained through bodies of the base's mass, the last one carrying
+        the ground; gravity is off on them (a model instance of their own). Returns the
+        ground's body and the joints."""
+        from pydrake.multibody.tree import PrismaticJoint, SpatialInertia, UnitInertia
+
+        instance = plant.AddModelInstance("base")
+        mb = _BASE_MASS_RATIO * m_blocks
+        parent, joints = plant.world_frame(), []
+        for k, a in enumerate(axes):
+            name = "base" if k == len(axes) - 1 else f"base_{a}"
+            body = plant.AddRigidBody(name, instance, SpatialInertia(
+                mb, np.zeros(3), UnitInertia.SolidBox(lx, ly, lz)))  # type: ignore[arg-type]  # pydrake stub mistypes vectors
+            joints.append(plant.AddJoint(PrismaticJoint(
+                f"slide_{a}", parent, body.body_frame(), _UNIT[a],  # type: ignore[arg-type]  # pydrake stub mistypes vectors
+                -math.inf, math.inf, 0.0)))
+            parent = body.body_frame()
+        plant.set_gravity_enabled(instance, False)
+        return body, joints
 
     @staticmethod
     def _add_support(plant: Any, body: Any, sup: Support, depth: float, props: Any,
@@ -505,10 +580,12 @@ class DrakeEngine(Engine):
 
     # ------------------------------------------------------------------ drive
     def _load_chunk(self, i0: int) -> None:
-        """Precompute base displacement and velocity for steps i0…i0+_CHUNK."""
+        """Precompute base displacement and velocity for steps i0…i0+_CHUNK (along x, or
+        one column per moving axis)."""
         drive, dt = self.drive, self._dt
-        self._u = drive.displacement(drive.grid(dt, _CHUNK, start=i0))[:, 0]
-        self._v = drive.velocity(drive.grid(dt, _CHUNK, start=i0, phase=self._phase))[:, 0]
+        cols: Any = 0 if self._planar else self._cols
+        self._u = drive.displacement(drive.grid(dt, _CHUNK, start=i0))[:, cols]
+        self._v = drive.velocity(drive.grid(dt, _CHUNK, start=i0, phase=self._phase))[:, cols]
         self._chunk_start = i0
 
     def _drive_base(self, t: float, dt: float) -> None:
@@ -517,18 +594,26 @@ class DrakeEngine(Engine):
         if self._chunk_start < 0 or j >= _CHUNK or j < 0:
             self._load_chunk(i)
             j = 0
-        joint = self._joint
-        assert joint is not None  # _build adds the joint whenever the base moves
-        joint.set_translation(self._pc, self._u[j])
-        joint.set_translation_rate(self._pc, self._v[j])
+        if self._planar:
+            joint = self._joint
+            assert joint is not None  # _build adds the joint whenever the base moves
+            joint.set_translation(self._pc, self._u[j])
+            joint.set_translation_rate(self._pc, self._v[j])
+            return
+        pc, u, v = self._pc, self._u[j], self._v[j]
+        for k, joint in enumerate(self._joints):
+            joint.set_translation(pc, u[k])
+            joint.set_translation_rate(pc, v[k])
 
     def _fix_base(self) -> bool:
-        drive, j, pc = self.drive, self._joint, self._pc
-        assert j is not None  # called only while the base moves: _build added the joint
-        j.set_translation(pc, float(drive.displacement(drive.end_time)[0]))
-        j.set_translation_rate(pc, 0.0)
-        if self._sap:
-            j.Lock(pc)  # a zero-velocity constraint in SAP: the base cannot creep
+        drive, pc = self.drive, self._pc
+        assert self._joints  # called only while the base moves: _build added the joints
+        u_end = drive.displacement(drive.end_time)
+        for j, c in zip(self._joints, self._cols, strict=True):
+            j.set_translation(pc, float(u_end[c]))
+            j.set_translation_rate(pc, 0.0)
+            if self._sap:
+                j.Lock(pc)  # a zero-velocity constraint in SAP: the base cannot creep
         # TAMSI ignores locks: the base's 10⁶ mass ratio keeps the drift negligible
         return True
 
@@ -562,3 +647,4 @@ class DrakeEngine(Engine):
         self._pc = None
         self._state = None
         self._joint = None
+        self._joints = []
