@@ -268,8 +268,13 @@ def _portable(exc: RockbenchError) -> RockbenchError:
 
 def _pool_job(job: Job) -> Trajectory:
     """:func:`run_job` in a pool child: bad-input errors must unpickle in the parent."""
+    return _in_pool(run_job, job)
+
+
+def _in_pool(fn: Callable[[Any], Any], task: Any) -> Any:
+    """``fn(task)`` in a pool child, a bad-input error made portable to the parent."""
     try:
-        return run_job(job)
+        return fn(task)
     except RockbenchError as exc:
         raise _portable(exc) from None
 
@@ -404,8 +409,7 @@ def run_jobs(
             return [failed(batches[b][0], fault)]
         return None
 
-    groups = {name: WorkerGroup(name, not ex.warm or _keeps_state(name))
-              for name in {j.engine for j in jobs}}
+    groups = _worker_groups(jobs, ex)
     tasks = [[jobs[i] for i in b] for b in batches]
     fn = _pool_batch if ex.isolate else run_batch
     map_tasks(fn, tasks, ex, on_done=batch_done, on_fault=batch_failed,
@@ -427,14 +431,20 @@ def _run_singly(jobs: list[Job], ex: ExecutionOptions, done: Callable[[int, Traj
     """:func:`run_jobs` one run per task (the per-run path)."""
     if not ex.isolate:
         return map_tasks(run_job, jobs, ex, on_done=done)
-    groups = {name: WorkerGroup(name, not ex.warm or _keeps_state(name))
-              for name in {j.engine for j in jobs}}
+    groups = _worker_groups(jobs, ex)
     # longest first: the last runs dispatched are the short ones, so that no worker
     # idles at the end of a study while another finishes a 20 s free-rocking run
     order = sorted(range(len(jobs)), key=lambda i: -cost_hint(jobs[i]))
     return map_tasks(_pool_job, jobs, ex, on_done=done, on_fault=failed,
                      timeout_of=lambda i: limit(jobs[i]), group_of=lambda i: groups[jobs[i].engine],
                      order=order)
+
+
+def _worker_groups(jobs: Sequence[Job], ex: ExecutionOptions) -> dict[str, WorkerGroup]:
+    """One pool of workers per engine: warm, or a fresh process per task where the engine
+    keeps state between runs or ``ex.warm`` is off."""
+    return {name: WorkerGroup(name, not ex.warm or _keeps_state(name))
+            for name in {j.engine for j in jobs}}
 
 
 def _batch_limit(limits: list[float | None]) -> float | None:
@@ -455,20 +465,23 @@ def plan_batches(jobs: Sequence[Job], batch: int = 0, workers: int = 1) -> list[
 
     together: dict[Any, list[int]] = {}
     out: list[list[int]] = []
+    caps: dict[str, int] = {}  # the most runs per batch, by engine
     for i, job in enumerate(jobs):
         try:
-            cap = batch_size(engine_class(job.engine)) if batch != 1 else 1
+            if job.engine not in caps:
+                own = batch_size(engine_class(job.engine))
+                caps[job.engine] = min(own, batch) if own > 1 and batch else own
             key = (job.engine, job.method, batch_key(job.scenario))
             hash(key)
         except (RockbenchError, TypeError):  # unknown engine, unhashable knob value
-            cap = 1
-        if cap <= 1:
+            out.append([i])
+            continue
+        if caps[job.engine] <= 1:
             out.append([i])
         else:
             together.setdefault(key, []).append(i)
     for key, members in together.items():
-        cap = batch_size(engine_class(key[0])) if batch == 0 else batch
-        size = min(cap, max(1, math.ceil(len(members) / workers)))
+        size = min(caps[key[0]], max(1, math.ceil(len(members) / workers)))
         out.extend(members[b:b + size] for b in range(0, len(members), size))
     return sorted(out)
 
@@ -501,10 +514,7 @@ def run_batch(jobs: Sequence[Job]) -> list[Trajectory]:
 
 def _pool_batch(jobs: list[Job]) -> list[Trajectory]:
     """:func:`run_batch` in a pool child: bad input must unpickle in the parent."""
-    try:
-        return run_batch(jobs)
-    except RockbenchError as exc:
-        raise _portable(exc) from None
+    return _in_pool(run_batch, jobs)
 
 
 def cost_hint(job: Job) -> float:
