@@ -167,6 +167,15 @@ class EngineSettings:
         except ValueError as exc:  # validation in a subclass __post_init__
             raise SettingsError(str(exc)) from None
 
+    @property
+    def physics_step(self) -> float | None:
+        """The physics step (s) these settings give: ``dt`` where an engine derives one (a
+        frame rate and sub-steps), else the ``timestep`` knob; None when it has neither."""
+        step = getattr(self, "dt", getattr(self, "timestep", None))
+        if isinstance(step, bool) or not isinstance(step, (int, float)):
+            return None
+        return float(step)
+
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-able dictionary of the knobs."""
         # knobs are scalars or tuples of scalars: no need for asdict's deep copies

@@ -198,14 +198,6 @@ def _resolve(cls: type[Engine], preset: str, overrides: Mapping[str, Any]) -> di
         return None
 
 
-def _physics_step(cls: type[Engine], preset: str, overrides: Mapping[str, Any]) -> float | None:
-    """The physics step (s) a setting gives: its ``dt`` where the settings derive one (a
-    frame rate and sub-steps), else its ``timestep``; None when it has neither."""
-    s = cls.settings(preset, **overrides)
-    step = getattr(s, "dt", getattr(s, "timestep", None))
-    return float(step) if isinstance(step, (int, float)) and not isinstance(step, bool) else None
-
-
 def _with_presets(cls: type[Engine], settings: list[Setting], add: bool) -> list[Setting]:
     """Name the presets each setting resolves to; append the other presets (``add``).
 
@@ -306,7 +298,7 @@ def plan_search(engine: str, *, preset: str = "accurate", knobs: Sequence[str] |
                 moved = _rung(role, value, level, hints.get(knob))
                 if moved is None or moved in seen or _resolve(cls, preset, {knob: moved}) is None:
                     continue
-                step = _physics_step(cls, preset, {knob: moved})
+                step = cls.settings(preset, **{knob: moved}).physics_step
                 if (max_timestep is not None and step is not None
                         and step > max_timestep * (1 + 1e-9)):
                     skipped.append(Skipped(knob, f"{fmt_value(moved)} gives a physics step of "

@@ -32,7 +32,7 @@ from rockbench.analytic import critical_angle
 from rockbench.analytic.overturning import housner_eta
 from rockbench.analytic.restitution import ImpactRestitution, effective_restitution
 from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
-from rockbench.engines import KnobRole, engine_class
+from rockbench.engines import engine_class
 from rockbench.errors import RockbenchError
 from rockbench.method import Method
 from rockbench.runner import ExecutionOptions
@@ -248,12 +248,8 @@ def sampled_for(scenario: Scenario, method: Method) -> Scenario:
     each sample is a state the engine computed (the peaks between impacts are then read
     to within about (π f Δt)²/2 of their height, 0.5 % for a 1 Hz swing at 60 Hz).
     """
-    cls = engine_class(method.engine)
-    knob = cls.knob(KnobRole.TIME_STEP)
-    if knob is None:
-        return scenario
-    step = getattr(cls.resolve_settings(method.settings), knob, None)
-    if not isinstance(step, float) or step * scenario.output_rate <= 1.0 + 1e-9:
+    step = engine_class(method.engine).resolve_settings(method.settings).physics_step
+    if step is None or step * scenario.output_rate <= 1.0 + 1e-9:
         return scenario
     rate = 1.0 / step
     return scenario.replace(name=f"{scenario.name}|{rate:.4g}Hz", output_rate=rate)

@@ -47,7 +47,7 @@ import numpy as np
 
 from rockbench.analytic import critical_angle
 from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
-from rockbench.engines import KnobRole, SettingsError, engine_class
+from rockbench.engines import SettingsError, engine_class
 from rockbench.errors import RockbenchError
 from rockbench.evaluation import PEAK_FLOOR, RunResult
 from rockbench.method import Method
@@ -453,13 +453,7 @@ def _by_construction(method: Method) -> str:
 def _timestep(method: Method) -> float | None:
     if method.is_reference:
         return None
-    cls = engine_class(method.engine)
-    resolved = cls.resolve_settings(method.settings)
-    value = getattr(resolved, "dt", None)  # a step made of others (Bullet: fps, substeps)
-    if not isinstance(value, (int, float)):
-        knob = cls.knob(KnobRole.TIME_STEP)
-        value = getattr(resolved, knob, None) if knob else None
-    return float(value) if isinstance(value, (int, float)) else None
+    return engine_class(method.engine).resolve_settings(method.settings).physics_step
 
 
 def _max(a: np.ndarray) -> float | None:
