@@ -5,11 +5,13 @@ point of the stack that falls the whole stack height ``H`` reaches at most
 ``sqrt(2 g H)``; the base drags the blocks at most at its peak speed. So no
 block centroid can move faster than::
 
-    v_max = factor · (sqrt(2 g H) + 2 max|u̇_g|) + v_floor
+    v_max = factor · (sqrt(2 g H + 2 E₀/m) + 2 max|u̇_g|) + v_floor
 
-and no block can spin faster than ``ω_max = v_max / k_min`` (``k_min`` the
-smallest centroidal radius of gyration about y: a block whose rotational energy
-½ m k² ω² exceeded ½ m v_max² would violate the same energy bound).
+(E₀ the kinetic energy a moving start gives, m the lightest body's mass) and no
+block can spin faster than ``ω_max = v_max / k_min`` (``k_min`` the smallest
+centroidal radius of gyration about y, or about any axis for a start out of the
+x–z plane: a block whose rotational energy ½ m k² ω² exceeded ½ m v_max² would
+violate the same energy bound).
 
 The check uses finite differences of sampled poses, i.e. mean speeds over a
 sample interval, which never exceed the peak speed: an honest trajectory can
@@ -71,8 +73,13 @@ class SpeedBound:
         height = scenario.geometry.total_height
         if v_base is None:
             v_base = scenario.motion.motion_bounds(scenario.duration)[1]
-        v_max = factor * (math.sqrt(2.0 * scenario.g * height) + 2.0 * v_base) + SPEED_FLOOR
-        k_min = min(math.sqrt(b.inertia[1] / b.m) for b in scenario.blocks)
+        # a body that starts moving has its kinetic energy to spend besides gravity's work
+        fall = (2.0 * scenario.g * height
+                + 2.0 * scenario.initial_kinetic_energy() / min(b.m for b in scenario.blocks))
+        v_max = factor * (math.sqrt(fall) + 2.0 * v_base) + SPEED_FLOOR
+        # in the plane a body turns about y only; a 3D start may spin it about any axis
+        axes = slice(1, 2) if scenario.planar_start else slice(0, 3)
+        k_min = min(math.sqrt(float(b.inertia[axes].min()) / b.m) for b in scenario.blocks)
         return cls(v_max=v_max, omega_max=v_max / k_min)
 
     def violation(

@@ -17,12 +17,13 @@ import zipfile
 from dataclasses import dataclass, field
 from enum import Enum
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["Status", "Trajectory", "QUANTITIES", "QUANTITIES_3D", "write_npz"]
+__all__ = ["Status", "Trajectory", "QUANTITIES", "QUANTITIES_3D", "write_npz", "Orientation",
+           "orientation_from_quaternions", "angles_from_quaternions"]
 
 #: Per-block quantities stored in a trajectory, in column order.
 QUANTITIES = ("theta", "x", "z", "wobble")
@@ -310,3 +311,43 @@ def _json_default(obj: Any) -> Any:
     if isinstance(obj, Enum):
         return obj.value
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+class Orientation(NamedTuple):
+    """The angles a :class:`Trajectory` reports of each sampled orientation (rad)."""
+
+    theta: np.ndarray
+    wobble: np.ndarray
+    roll: np.ndarray
+    twist: np.ndarray
+
+
+def orientation_from_quaternions(q: np.ndarray) -> Orientation:
+    """θ, wobble, roll and twist from unit quaternions (w, x, y, z), shape (..., 4).
+
+    θ = atan2(R₀₂, R₂₂) and the roll atan2(−R₁₂, R₂₂) are the lean of the body's z axis
+    toward +x and toward −y (rotations about +y and +x); the twist is the rotation about
+    the body's own z axis, 2 atan2(q_z, q_w) (the swing–twist decomposition), wrapped to
+    (−π, π]; the wobble is the angle between the body's y axis and the world's.
+    """
+    theta, wobble = angles_from_quaternions(q)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    r12 = 2.0 * (y * z - w * x)
+    r22 = 1.0 - 2.0 * (x * x + y * y)
+    twist = 2.0 * np.arctan2(z, w)
+    twist = np.where(twist > np.pi, twist - 2.0 * np.pi, twist)
+    twist = np.where(twist <= -np.pi, twist + 2.0 * np.pi, twist)
+    return Orientation(theta, wobble, np.arctan2(-r12, r22), twist)
+
+
+def angles_from_quaternions(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rocking angle about +y and out-of-plane wobble from unit quaternions (w, x, y, z).
+
+    θ = atan2(R02, R22) (the body z axis tilting toward +x is positive) and the
+    wobble is the angle between the body y axis and the world y axis.
+    """
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    r02 = 2.0 * (x * z + w * y)
+    r22 = 1.0 - 2.0 * (x * x + y * y)
+    r11 = 1.0 - 2.0 * (x * x + z * z)
+    return np.arctan2(r02, r22), np.arccos(np.clip(r11, -1.0, 1.0))

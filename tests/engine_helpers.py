@@ -21,6 +21,14 @@ from rockbench.geometry.polygon import rotate
 from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario, SinePulse, get_scenario
 from rockbench.scenarios.excitation import Components
+from rockbench.studies.references_3d import (
+    PILLAR,
+    corner_landing_time,
+    corner_release,
+    drum_release,
+    first_zero,
+    precession,
+)
 from rockbench.studies.tilting import quasi_static, tilting_table
 from rockbench.trajectory import Status, Trajectory
 
@@ -315,3 +323,56 @@ def check_slides_like_coulomb(scenario: Scenario, tr: Trajectory, ref: Trajector
     if scenario.n_blocks == 2:
         relative = np.max(np.abs(slip_of(tr, scenario, 1) - slip_of(tr, scenario, 0))) / peak
         assert relative <= slip_tol, f"interface slip {relative:.2%} of the peak slip"
+
+
+
+def check_cylinder_rocks_like_housner(engine: Engine, settings: Any = "accurate", *,
+                                      rel: float = 0.01, plane_tol: float = 1e-4) -> Trajectory:
+    """The drum released in the x–z plane at 0.5 λ rocks on its rim as Housner's block of
+    half-width R with the cylinder's inertia: the first impact within ``rel`` of the
+    reference's, θ up to it within 1 % λ, and no turn out of the plane (roll and twist
+    below ``plane_tol`` rad) until then. Returns the trajectory."""
+    sc = drum_release()
+    ref = reference(sc)
+    tr = engine.simulate(sc, settings)
+    assert tr.status is Status.OK, tr.message
+    t_ref = first_zero(ref.t, ref.theta[:, 0])
+    assert first_zero(tr.t, tr.theta[:, 0]) == pytest.approx(t_ref, rel=rel)
+    before = tr.t < 0.95 * t_ref
+    assert np.max(np.abs(tr.theta[before, 0] - ref.theta[before, 0])) < 0.01 * lam(sc)
+    assert np.max(np.abs(tr.roll[before])) < plane_tol
+    assert np.max(np.abs(tr.twist[before])) < plane_tol
+    return tr
+
+
+def check_corner_release(engine: Engine, settings: Any = "accurate", *, rel: float = 0.01,
+                         diagonal_tol: float = 1e-3) -> Trajectory:
+    """The square pillar released from rest on its corner at 0.5 λ of the diagonal (azimuth
+    45°) rocks in the diagonal plane until it lands: the landing (θ's first zero) within
+    ``rel`` of :func:`corner_landing_time`, and the roll the mirror of θ (the top leans
+    toward +x and +y alike) within ``diagonal_tol`` rad. Returns the trajectory."""
+    sc = corner_release()
+    tr = engine.simulate(sc, settings)
+    assert tr.status is Status.OK, tr.message
+    assert tr.tilt[0, 0] == pytest.approx(sc.theta0, rel=1e-6)
+    assert tr.azimuth[0, 0] == pytest.approx(0.25 * math.pi, abs=1e-6)
+    t_land = corner_landing_time(PILLAR, sc.theta0)
+    assert first_zero(tr.t, tr.theta[:, 0]) == pytest.approx(t_land, rel=rel)
+    before = tr.t < 0.95 * t_land
+    assert np.max(np.abs(tr.theta[before, 0] + tr.roll[before, 0])) < diagonal_tol
+    return tr
+
+
+def check_steady_precession(engine: Engine, settings: Any = "accurate", *, tilt_tol: float,
+                            rate_rtol: float, duration: float = 2.0) -> Trajectory:
+    """The slender cylinder started in steady precession holds its tilt within ``tilt_tol``
+    rad of 0.2 and precesses at the closed form's rate Ω within ``rate_rtol`` (the mean
+    rate of its lean's azimuth). Returns the trajectory."""
+    sc, sp = precession(duration)
+    tr = engine.simulate(sc, settings)
+    assert tr.status is Status.OK, tr.message
+    assert tr.tilt[0, 0] == pytest.approx(sp.theta, abs=1e-6)
+    assert np.max(np.abs(tr.tilt[:, 0] - sp.theta)) < tilt_tol
+    az = np.unwrap(tr.azimuth[:, 0])
+    assert (az[-1] - az[0]) / (tr.t[-1] - tr.t[0]) == pytest.approx(sp.psi_dot, rel=rate_rtol)
+    return tr

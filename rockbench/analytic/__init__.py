@@ -1,4 +1,4 @@
-"""Analytic references: Housner's single block, the two-stacked-block model, Coulomb sliding.
+"""Analytic references: Housner's block, the two-block model, sliding, the rolling cylinder.
 
 :func:`reference` picks the model that fits a scenario. This package never
 imports :mod:`rockbench.engines`: a reference must not depend on what it checks.
@@ -13,6 +13,7 @@ from rockbench.analytic.closed_forms import (
     impact_velocity,
     quarter_period,
 )
+from rockbench.analytic.cylinder_reference import RollingStart, rolling_reference, rolling_start
 from rockbench.analytic.housner import SingleBlockSolution, single_block_reference, solve_single
 from rockbench.analytic.normalisation import critical_angle, uplift_ratio
 from rockbench.analytic.overturning import (
@@ -69,7 +70,7 @@ __all__ = [
     "limit_analysis", "stands", "minimum_stable", "LimitResult", "BlockMotion",
     "InterfaceMotion", "InterfaceForce", "critical_angle", "uplift_ratio", "coverage",
     "solve_rolling", "steady_precession", "RollingSolution", "RollingOutcome",
-    "SteadyPrecession",
+    "SteadyPrecession", "RollingStart", "rolling_start", "rolling_reference",
 ]
 
 
@@ -77,20 +78,36 @@ def coverage(scenario: Scenario) -> str:
     """Why no analytic model covers ``scenario`` ('' when one does).
 
     The models are planar: one block (Housner) or two stacked centred blocks
-    (the two-block model), both with the vertical base motion in g + ü_z, and
-    the Coulomb slider (horizontal base motion only); other geometries have
+    (the two-block model), both with the vertical base motion in g + ü_z (a
+    cylinder rocks in the plane as a block of half-width R does), and the
+    Coulomb slider (horizontal base motion only); in 3D, one cylinder tilted on
+    its rim rolls without slipping (:func:`rolling_reference`), from any start
+    and under base motion along x, y and z. Other geometries have
     their static limit-analysis reference only.
     """
     col = scenario.geometry.column
     if col is None or len(col) > 2 or not col.centred:
         return "no analytic model: one block or two centred stacked blocks only"
     axes = scenario.motion.axes
+    if _rolls(scenario):
+        return ""
+    if scenario.moving_start or not scenario.planar_start:
+        return ("no analytic model: a start out of the x–z plane or a moving one has the "
+                "rolling reference of a tilted cylinder only")
     if "y" in axes:
         return "no analytic model: the planar models take no base motion along y"
     if "z" in axes and slides(scenario):
         return ("no analytic model: the vertical base motion enters the rocking models "
                 "only, not the Coulomb sliding reference")
     return ""
+
+
+def _rolls(scenario: Scenario) -> bool:
+    """A tilted cylinder alone that starts out of the plane, moving, or under motion along y:
+    the rolling reference (a planar one rocks as Housner's block, impacts included)."""
+    return (scenario.n_blocks == 1 and scenario.has_cylinders and scenario.theta0 != 0.0
+            and (scenario.moving_start or not scenario.planar_start
+                 or "y" in scenario.motion.axes))
 
 
 def has_reference(scenario: Scenario) -> bool:
@@ -123,6 +140,8 @@ def reference(scenario: Scenario, *, linear: bool = False) -> Trajectory:
     why = coverage(scenario)
     if why:
         raise UnsupportedScenario(why)
+    if _rolls(scenario):
+        return rolling_reference(scenario)
     if slides(scenario):
         return sliding_reference(scenario)
     if scenario.n_blocks == 1:

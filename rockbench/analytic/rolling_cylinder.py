@@ -81,6 +81,7 @@ from scipy.optimize import brentq
 
 from rockbench import checks
 from rockbench.errors import ScenarioError
+from rockbench.geometry import Cylinder
 
 __all__ = [
     "Cylinder", "RollingState", "RollingEvent", "RollingSolution", "RollingOutcome",
@@ -92,89 +93,6 @@ __all__ = [
 BaseAcceleration = Callable[[float], Sequence[float]]
 
 _N_STATE = 8  # θ, ψ, φ, w1, w2, w3, x_G, y_G
-
-
-@dataclass(frozen=True)
-class Cylinder:
-    """A uniform solid circular cylinder standing on its base.
-
-    Parameters
-    ----------
-    radius : float
-        R (m), radius of the base rim it rolls on.
-    height : float
-        H (m); the centre of mass is H/2 above the base on the axis.
-    density : float, optional
-        kg/m³. Give exactly one of ``density`` and ``mass``.
-    mass : float, optional
-        kg.
-
-    Raises
-    ------
-    ScenarioError
-        A size or mass that is not a positive finite number, or both or neither
-        of ``density`` and ``mass``.
-    """
-
-    radius: float
-    height: float
-    density: float | None = None
-    mass: float | None = None
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "radius", checks.length(self.radius, "cylinder radius"))
-        object.__setattr__(self, "height", checks.length(self.height, "cylinder height"))
-        if (self.density is None) == (self.mass is None):
-            raise ScenarioError("cylinder needs exactly one of 'density' and 'mass'")
-        if self.density is not None:
-            object.__setattr__(self, "density", checks.number(
-                self.density, "cylinder density", low=0.0, unit="kg/m³"))
-        else:
-            object.__setattr__(self, "mass", checks.number(
-                self.mass, "cylinder mass", low=0.0, unit="kg"))
-
-    @property
-    def volume(self) -> float:
-        """π R² H (m³)."""
-        return math.pi * self.radius ** 2 * self.height
-
-    @property
-    def m(self) -> float:
-        """Mass (kg)."""
-        if self.mass is not None:
-            return self.mass
-        assert self.density is not None
-        return self.density * self.volume
-
-    @property
-    def h(self) -> float:
-        """Height of the centre of mass above the base, H/2 (m)."""
-        return 0.5 * self.height
-
-    @property
-    def i_axial(self) -> float:
-        """Centroidal moment of inertia about the symmetry axis, m R²/2 (kg m²)."""
-        return 0.5 * self.m * self.radius ** 2
-
-    @property
-    def i_transverse(self) -> float:
-        """Centroidal moment of inertia about a diameter, m (3R² + H²)/12 (kg m²)."""
-        return self.m * (3.0 * self.radius ** 2 + self.height ** 2) / 12.0
-
-    @property
-    def r(self) -> float:
-        """Distance from a rim point to the centre of mass, √(R² + h²) (m)."""
-        return math.hypot(self.radius, self.h)
-
-    @property
-    def alpha(self) -> float:
-        """Tilt at which the centre of mass is above the contact point, atan(R/h) (rad)."""
-        return math.atan2(self.radius, self.h)
-
-    @property
-    def i_pivot(self) -> float:
-        """Moment of inertia about the rim tangent through the contact, I₁ + m r² (kg m²)."""
-        return self.i_transverse + self.m * self.r ** 2
 
 
 class RollingOutcome(str, Enum):

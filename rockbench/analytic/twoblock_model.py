@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 if TYPE_CHECKING:
-    from rockbench.geometry import Block
+    from rockbench.geometry import Upright
 
 __all__ = ["BlockParams", "Pattern", "TwoBlockModel", "parse_pattern"]
 
@@ -83,8 +83,8 @@ class BlockParams:
         return cls(b, h, m, m * (b * b + h * h) / 3.0)
 
     @classmethod
-    def from_block(cls, block: Block) -> BlockParams:
-        """Parameters of a :class:`rockbench.scenarios.Block` (pivots at the chamfer corners)."""
+    def from_block(cls, block: Upright) -> BlockParams:
+        """Parameters of a block (pivots at the chamfer corners) or a drum (at its rim)."""
         return cls(
             float(block.pivot_half_width),
             float(block.h),

@@ -40,11 +40,12 @@ class AnalyticSettings(EngineSettings):
 
 
 class AnalyticEngine(Engine):
-    """Housner (one block) and the two-block model of Psycharis / Spanos et al."""
+    """Housner (one block), the two-block model, Coulomb sliding and the rolling cylinder."""
 
     name: ClassVar[str] = "analytic"
     capabilities: ClassVar[Capabilities] = Capabilities(
-        dimensions=2, max_blocks=2, analytic=True, base_axes="xz",
+        dimensions=2, max_blocks=2, analytic=True, base_axes="xyz", cylinders=True,
+        start3d=True,
         no_assemblies="no dynamic closed form exists; an assembly's reference is its "
                       "limit-analysis collapse factor (rockbench collapse)")
     Settings: ClassVar[type[EngineSettings]] = AnalyticSettings

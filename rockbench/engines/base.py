@@ -39,7 +39,11 @@ Contract for implementers (the numbered rules that every plugin follows)
    top face is the plane z = 0, friction and restitution from
    ``scenario.contact``, no hidden damping, no sleeping. Place body ``i``'s
    centre of gravity and angle at ``scenario.initial_poses()[i]``, at rest.
-   Return the physics time step actually used.
+   Declare ``Capabilities.cylinders`` only where a
+   :class:`~rockbench.geometry.Cylinder` is built as a cylinder, and
+   ``Capabilities.start3d`` only where the 3D pose and velocities of
+   ``scenario.initial_states()[i]`` are applied (world axes). Return the
+   physics time step actually used.
 4. Apply the base motion: :attr:`drive` (a :class:`~rockbench.engines.drive.BaseDrive`,
    set before :meth:`_build`) samples the scenario's three-component motion on
    the engine's step grid; the engine applies it (velocity and/or displacement,
@@ -87,7 +91,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from types import ModuleType
-from typing import Any, ClassVar, NamedTuple
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -99,7 +103,13 @@ from rockbench.errors import EngineUnavailable, UnsupportedScenario
 from rockbench.geometry import Block
 from rockbench.limits import check_memory
 from rockbench.scenarios import Scenario
-from rockbench.trajectory import Status, Trajectory
+from rockbench.trajectory import (
+    Orientation,
+    Status,
+    Trajectory,
+    angles_from_quaternions,
+    orientation_from_quaternions,
+)
 
 __all__ = ["Engine", "Capabilities", "angles_from_quaternions", "install_hint", "OVERTURN_MARGIN",
            "require_library", "trajectory_from_poses", "Watchdog", "Orientation",
@@ -200,6 +210,15 @@ class Capabilities:
         Why not, when ``prisms`` is False (the unsupported status says it).
     base_axes : str
         The axes of the base motion it applies (``"x"``, ``"xz"``, ``"xyz"``).
+    cylinders : bool
+        Whether it builds :class:`~rockbench.geometry.Cylinder` bodies as
+        cylinders (without it they are ``unsupported``: a box in their place
+        would be another body).
+    start3d : bool
+        Whether it places bodies at the 3D start of
+        :meth:`~rockbench.scenarios.Scenario.initial_states` (a tilt toward any
+        azimuth, initial velocities); without it a scenario that has one is
+        ``unsupported``.
     """
 
     dimensions: int = 3
@@ -211,46 +230,8 @@ class Capabilities:
     prisms: bool = True
     no_prisms: str = ""
     base_axes: str = "x"
-
-
-class Orientation(NamedTuple):
-    """The angles a :class:`Trajectory` reports of each sampled orientation (rad)."""
-
-    theta: np.ndarray
-    wobble: np.ndarray
-    roll: np.ndarray
-    twist: np.ndarray
-
-
-def orientation_from_quaternions(q: np.ndarray) -> Orientation:
-    """θ, wobble, roll and twist from unit quaternions (w, x, y, z), shape (..., 4).
-
-    θ = atan2(R₀₂, R₂₂) and the roll atan2(−R₁₂, R₂₂) are the lean of the body's z axis
-    toward +x and toward −y (rotations about +y and +x); the twist is the rotation about
-    the body's own z axis, 2 atan2(q_z, q_w) (the swing–twist decomposition), wrapped to
-    (−π, π]; the wobble is the angle between the body's y axis and the world's.
-    """
-    theta, wobble = angles_from_quaternions(q)
-    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    r12 = 2.0 * (y * z - w * x)
-    r22 = 1.0 - 2.0 * (x * x + y * y)
-    twist = 2.0 * np.arctan2(z, w)
-    twist = np.where(twist > np.pi, twist - 2.0 * np.pi, twist)
-    twist = np.where(twist <= -np.pi, twist + 2.0 * np.pi, twist)
-    return Orientation(theta, wobble, np.arctan2(-r12, r22), twist)
-
-
-def angles_from_quaternions(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rocking angle about +y and out-of-plane wobble from unit quaternions (w, x, y, z).
-
-    θ = atan2(R02, R22) (the body z axis tilting toward +x is positive) and the
-    wobble is the angle between the body y axis and the world y axis.
-    """
-    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    r02 = 2.0 * (x * z + w * y)
-    r22 = 1.0 - 2.0 * (x * x + y * y)
-    r11 = 1.0 - 2.0 * (x * x + z * z)
-    return np.arctan2(r02, r22), np.arccos(np.clip(r11, -1.0, 1.0))
+    cylinders: bool = False
+    start3d: bool = False
 
 
 class Engine(ABC):
@@ -392,6 +373,12 @@ class Engine(ABC):
         if scenario.geometry.column is None and not cap.assemblies:
             raise UnsupportedScenario(
                 f"{self.name} builds only blocks standing on each other: {cap.no_assemblies}")
+        if scenario.has_cylinders and not cap.cylinders:
+            raise UnsupportedScenario(f"{self.name} does not build cylinders")
+        if not cap.start3d and (scenario.moving_start or not scenario.planar_start):
+            raise UnsupportedScenario(
+                f"{self.name} starts bodies at rest in the x–z plane only; this scenario "
+                f"starts them {'moving' if scenario.moving_start else 'tilted out of it'}")
         if not cap.prisms and not all(isinstance(b, Block) for b in scenario.blocks):
             raise UnsupportedScenario(
                 f"{self.name} builds rectangular blocks only: {cap.no_prisms}")
@@ -649,9 +636,10 @@ class Watchdog:
         self.free = not drive.moving
         mgz0 = float(self.masses @ p0[:, 1])
         mgz_up = mgz0 if scenario.theta0 == 0.0 else float(self.masses @ geo.centroids[:, 1])
-        # potential energy may not rise above its start in free motion, beyond
-        # the contact penetration noise of a soft engine
-        self.z_limit = mgz0 + 0.02 * abs(mgz0 - mgz_up) + 1e-4 * self.masses.sum() * height
+        # potential energy may not rise above its start (and the kinetic energy it starts
+        # with) in free motion, beyond the contact penetration noise of a soft engine
+        self.z_limit = (mgz0 + 0.02 * abs(mgz0 - mgz_up) + 1e-4 * self.masses.sum() * height
+                        + scenario.initial_kinetic_energy() / scenario.g)
         self.chunk = max(1, int(self.PERIOD * scenario.output_rate))
         # the speed bound as the largest move per (uniform) output interval
         self.bound = SpeedBound.for_scenario(scenario, v_base=v_base)

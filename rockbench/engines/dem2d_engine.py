@@ -52,7 +52,7 @@ from rockbench.engines import dem2d_kernels as K
 from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.geometry import Block
+from rockbench.geometry import Upright
 from rockbench.scenarios import Free, Scenario
 
 __all__ = ["CornerContact", "Dem2dEngine", "Dem2dSettings", "adjacent_pairs", "assembly_contacts",
@@ -369,7 +369,7 @@ def pair_damping(scenario: Scenario, s: Dem2dSettings, kn: float) -> np.ndarray:
     return out
 
 
-def _single_block(scenario: Scenario) -> Block:
+def _single_block(scenario: Scenario) -> Upright:
     """The scenario's one rectangular block, whose η an ``eta`` override calibrates."""
     col = scenario.geometry.column
     if col is None or len(col) != 1:

@@ -1,16 +1,18 @@
-"""Rigid bodies and fixed supports: rectangular blocks, convex prisms, support polygons.
+"""Rigid bodies and fixed supports: rectangular blocks, convex prisms, cylinders, supports.
 
 Every body shares one protocol, which engines, references and reports read:
 ``m`` (kg), ``depth`` (m, along y, centred on y = 0), ``width`` and ``height``
 (extents in its own frame), ``chamfer``, ``centroid`` (its centre of gravity
 in its own frame), ``profile()`` (its convex outline in the x–z plane about the
 centre of gravity, counter-clockwise), ``inertia`` (principal centroidal
-moments) and ``inertia_tensor``. A :class:`Support` is a fixed convex polygon
-in world coordinates that moves with the base.
+moments) and ``inertia_tensor``. A :class:`Cylinder` (a drum, a column) shows
+its x–z silhouette, a rectangle, as its profile. A :class:`Support` is a fixed
+convex polygon in world coordinates that moves with the base.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -28,7 +30,8 @@ from rockbench.geometry.polygon import (
 )
 from rockbench.geometry.rocking import RockingProperties, rocking_about
 
-__all__ = ["Block", "Prism", "Support", "Body", "vertex_list"]
+__all__ = ["Block", "Prism", "Cylinder", "Support", "Body", "Upright", "vertex_list",
+           "footprint_pivot"]
 
 
 def _mass(mass: float | None, density: float | None, volume: float) -> float:
@@ -39,12 +42,13 @@ def _mass(mass: float | None, density: float | None, volume: float) -> float:
     return density * volume
 
 
-def _mass_or_density(density: Any, mass: Any) -> tuple[float | None, float | None]:
+def _mass_or_density(density: Any, mass: Any, what: str = "block"
+                     ) -> tuple[float | None, float | None]:
     if (density is None) == (mass is None):
-        raise ScenarioError("block needs exactly one of 'density' and 'mass'")
+        raise ScenarioError(f"{what} needs exactly one of 'density' and 'mass'")
     if density is not None:
-        return checks.number(density, "block density", low=0.0, unit="kg/m³"), None
-    return None, checks.number(mass, "block mass", low=0.0, unit="kg")
+        return checks.number(density, f"{what} density", low=0.0, unit="kg/m³"), None
+    return None, checks.number(mass, f"{what} mass", low=0.0, unit="kg")
 
 
 @dataclass(frozen=True)
@@ -313,8 +317,169 @@ class Prism:
         return d
 
 
+@dataclass(frozen=True)
+class Cylinder:
+    """A uniform solid circular cylinder standing on its base: a drum, a column, a statue's core.
+
+    Its symmetry axis is the body's z axis. In the x–z plane it shows its
+    silhouette, a 2R × H rectangle (:meth:`profile`), and rocks in that plane on
+    a rim point as a block of half-width R does, with the cylinder's inertia
+    (:meth:`rocking`); in 3D it rocks on its rim about any horizontal axis and
+    may roll on it (:mod:`rockbench.analytic.rolling_cylinder`).
+
+    Parameters
+    ----------
+    radius : float
+        R (m), the radius of its base rim.
+    height : float
+        H (m); the centre of mass is H/2 above the base on the axis.
+    density : float, optional
+        kg/m³. Give exactly one of ``density`` and ``mass``.
+    mass : float, optional
+        kg.
+
+    Raises
+    ------
+    ScenarioError
+        A size or mass that is not a positive finite number, or both or neither
+        of ``density`` and ``mass``.
+    """
+
+    radius: float
+    height: float
+    density: float | None = None
+    mass: float | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "radius", checks.length(self.radius, "cylinder radius"))
+        object.__setattr__(self, "height", checks.length(self.height, "cylinder height"))
+        density, mass = _mass_or_density(self.density, self.mass, "cylinder")
+        object.__setattr__(self, "density", density)
+        object.__setattr__(self, "mass", mass)
+
+    @property
+    def volume(self) -> float:
+        """π R² H (m³)."""
+        return math.pi * self.radius ** 2 * self.height
+
+    @property
+    def m(self) -> float:
+        """Mass (kg)."""
+        return _mass(self.mass, self.density, self.volume)
+
+    @property
+    def width(self) -> float:
+        """Extent along x, the diameter 2R (m)."""
+        return 2.0 * self.radius
+
+    @property
+    def depth(self) -> float:
+        """Extent along y, the diameter 2R (m)."""
+        return 2.0 * self.radius
+
+    @property
+    def chamfer(self) -> float:
+        """Always 0."""
+        return 0.0
+
+    @property
+    def b(self) -> float:
+        """Half-width of its silhouette, R (m)."""
+        return self.radius
+
+    @property
+    def h(self) -> float:
+        """Height of the centre of mass above the base, H/2 (m)."""
+        return 0.5 * self.height
+
+    @property
+    def pivot_half_width(self) -> float:
+        """Distance from the axis to a rim pivot, R (m)."""
+        return self.radius
+
+    @property
+    def centroid(self) -> np.ndarray:
+        """Centre of gravity in the body's own frame: its centre (0, 0)."""
+        return np.zeros(2)
+
+    @property
+    def i_axial(self) -> float:
+        """Centroidal moment of inertia about the symmetry axis, m R²/2 (kg m²)."""
+        return 0.5 * self.m * self.radius ** 2
+
+    @property
+    def i_transverse(self) -> float:
+        """Centroidal moment of inertia about a diameter, m (3R² + H²)/12 (kg m²)."""
+        return self.m * (3.0 * self.radius ** 2 + self.height ** 2) / 12.0
+
+    @property
+    def r(self) -> float:
+        """Distance from a rim point to the centre of mass, √(R² + h²) (m)."""
+        return math.hypot(self.radius, self.h)
+
+    @property
+    def alpha(self) -> float:
+        """Tilt at which the centre of mass is above the contact point, atan(R/h) (rad)."""
+        return math.atan2(self.radius, self.h)
+
+    @property
+    def i_pivot(self) -> float:
+        """Moment of inertia about the rim tangent through the contact, I₁ + m r² (kg m²)."""
+        return self.i_transverse + self.m * self.r ** 2
+
+    @property
+    def inertia(self) -> np.ndarray:
+        """Principal centroidal moments (I₁, I₁, I₃) about x, y and the axis z (kg m²)."""
+        return np.array([self.i_transverse, self.i_transverse, self.i_axial])
+
+    @property
+    def inertia_tensor(self) -> np.ndarray:
+        """Centroidal inertia tensor (3, 3): diagonal."""
+        return np.diag(self.inertia)
+
+    def rocking(self, g: float = 9.81) -> RockingProperties:
+        """Rocking constants λ, R, p, η on a rim point, in any vertical plane through its axis."""
+        return rocking_about(self.m, self.radius, self.h, self.i_transverse, g)
+
+    def profile(self) -> np.ndarray:
+        """Its silhouette in the x–z plane about the centroid, counter-clockwise, shape (4, 2)."""
+        b, h = self.radius, self.h
+        return np.array([[-b, -h], [b, -h], [b, h], [-b, h]])
+
+    def mirrored(self) -> Cylinder:
+        """The mirror image in the plane x = 0 of its frame (the same cylinder)."""
+        return self
+
+    def to_dict(self) -> dict[str, Any]:
+        """Scenario-file representation (without the pose)."""
+        d: dict[str, Any] = {"radius": self.radius, "height": self.height}
+        if self.mass is not None:
+            d["mass"] = self.mass
+        else:
+            d["density"] = self.density
+        return d
+
+
+def footprint_pivot(body: Upright, azimuth: float) -> np.ndarray:
+    """The point of a body's base footprint furthest toward the azimuth ψ, (x, y) in its frame.
+
+    A body tilted toward the horizontal direction u = (cos ψ, sin ψ) pivots
+    there: on a block, the edge's midpoint when u is along an axis, a corner
+    otherwise; on a cylinder, the rim point at ψ.
+    """
+    c, s = math.cos(azimuth), math.sin(azimuth)
+    if isinstance(body, Cylinder):
+        return body.radius * np.array([c, s])
+    # a component within rounding of zero is an axis: the pivot is the edge's midpoint
+    sx = 0.0 if abs(c) < 1e-12 else math.copysign(1.0, c)
+    sy = 0.0 if abs(s) < 1e-12 else math.copysign(1.0, s)
+    return np.array([sx * body.pivot_half_width, sy * 0.5 * body.depth])
+
+
 #: Any rigid body of a geometry.
-Body = Block | Prism
+Body = Block | Prism | Cylinder
+#: A body that stands upright in a column and rocks on its bottom pivots.
+Upright = Block | Cylinder
 
 
 @dataclass(frozen=True)

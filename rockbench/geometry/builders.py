@@ -13,19 +13,19 @@ import numpy as np
 
 from rockbench import checks
 from rockbench.errors import ScenarioError
-from rockbench.geometry.bodies import Block, Body, Prism, Support
+from rockbench.geometry.bodies import Block, Body, Cylinder, Prism, Support, Upright
 from rockbench.geometry.structure import Geometry, Pose
 
 __all__ = ["single", "stack", "stack_poses", "drum_column", "parapet", "running_bond_wall",
            "voussoir_arch", "semicircular_arch"]
 
 
-def single(block: Block) -> Geometry:
+def single(block: Upright) -> Geometry:
     """One block standing centred on the base."""
     return stack((block,))
 
 
-def stack_poses(blocks: Sequence[Block], offsets: Sequence[float]) -> tuple[Pose, ...]:
+def stack_poses(blocks: Sequence[Upright], offsets: Sequence[float]) -> tuple[Pose, ...]:
     """Poses of blocks stacked bottom first, each centre at its offset along x."""
     out, z = [], 0.0
     for b, x in zip(blocks, offsets, strict=True):
@@ -34,7 +34,7 @@ def stack_poses(blocks: Sequence[Block], offsets: Sequence[float]) -> tuple[Pose
     return tuple(out)
 
 
-def stack(blocks: Sequence[Block], offsets: Sequence[float] = ()) -> Geometry:
+def stack(blocks: Sequence[Upright], offsets: Sequence[float] = ()) -> Geometry:
     """Blocks stacked bottom to top, each on the one below.
 
     Parameters
@@ -56,8 +56,8 @@ def stack(blocks: Sequence[Block], offsets: Sequence[float] = ()) -> Geometry:
     blocks = tuple(blocks)
     if not blocks:
         raise ScenarioError("a stack needs at least one block")
-    if not all(isinstance(b, Block) for b in blocks):
-        raise ScenarioError("stack blocks must be Block instances")
+    if not all(isinstance(b, (Block, Cylinder)) for b in blocks):
+        raise ScenarioError("stack blocks must be Block or Cylinder instances")
     offs = tuple(checks.coordinate(o, "stack offset") for o in offsets) \
         or (0.0,) * len(blocks)
     if len(offs) != len(blocks):
@@ -67,7 +67,7 @@ def stack(blocks: Sequence[Block], offsets: Sequence[float] = ()) -> Geometry:
     return Geometry(blocks, stack_poses(blocks, offs))
 
 
-def _check_stands(blocks: Sequence[Block], offsets: Sequence[float]) -> None:
+def _check_stands(blocks: Sequence[Upright], offsets: Sequence[float]) -> None:
     """Refuse a stack whose upper blocks' centre of mass lies off a contact."""
     ms = [b.m for b in blocks]
     for i in range(1, len(blocks)):

@@ -36,7 +36,7 @@ import numpy as np
 
 from rockbench import checks
 from rockbench.errors import ScenarioError
-from rockbench.geometry.bodies import Block, Body, Prism, Support
+from rockbench.geometry.bodies import Block, Body, Cylinder, Prism, Support, Upright
 from rockbench.geometry.polygon import Edges, face_contact, penetration, rotate
 from rockbench.geometry.rocking import RockingProperties, rocking_about
 
@@ -104,7 +104,7 @@ class Geometry:
 
     Parameters
     ----------
-    bodies : sequence of Block or Prism
+    bodies : sequence of Block, Prism or Cylinder
         The movable bodies (bottom first for a stack).
     poses : sequence of (x, z, angle)
         One per body: a Block's centroid and orientation, a Prism's frame
@@ -134,8 +134,8 @@ class Geometry:
         bodies, supports = tuple(self.bodies), tuple(self.supports)
         if not bodies:
             raise ScenarioError("a geometry needs at least one block")
-        if not all(isinstance(b, (Block, Prism)) for b in bodies):
-            raise ScenarioError("geometry bodies must be Block or Prism instances")
+        if not all(isinstance(b, (Block, Prism, Cylinder)) for b in bodies):
+            raise ScenarioError("geometry bodies must be Block, Prism or Cylinder instances")
         if not all(isinstance(s, Support) for s in supports):
             raise ScenarioError("geometry supports must be Support instances")
         poses = tuple(self.poses)
@@ -299,7 +299,7 @@ class Geometry:
         nb = len(self.bodies)
         if self.supports or not self.base or any(a != 0.0 for _, _, a in self.poses):
             return None
-        if not all(isinstance(b, Block) for b in self.bodies):
+        if not all(isinstance(b, (Block, Cylinder)) for b in self.bodies):
             return None
         base = nb  # the ground slab follows the bodies (no supports)
         pairs = {(i.a, i.b) for i in self.interfaces}
@@ -334,7 +334,7 @@ class Geometry:
 
 @dataclass(frozen=True, eq=False)
 class Column:
-    """A geometry of upright rectangular blocks, each on the one below, the bottom on the base.
+    """A geometry of upright blocks or cylinders, each on the one below, the bottom on the base.
 
     The view the closed-form rocking models read (stacks of the paper, drum
     columns, a parapet on its wall).
@@ -348,10 +348,10 @@ class Column:
     geometry: Geometry
 
     @property
-    def blocks(self) -> tuple[Block, ...]:
-        """The blocks, bottom first."""
-        # every body is a Block: Geometry.column builds a Column only then
-        return cast("tuple[Block, ...]", self.geometry.bodies)
+    def blocks(self) -> tuple[Upright, ...]:
+        """The blocks (or drums), bottom first."""
+        # every body is a Block or a Cylinder: Geometry.column builds a Column only then
+        return cast("tuple[Upright, ...]", self.geometry.bodies)
 
     def __len__(self) -> int:
         return len(self.geometry.bodies)

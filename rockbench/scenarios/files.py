@@ -15,6 +15,7 @@ is written in the stack form when that form rebuilds it exactly.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -22,7 +23,7 @@ import tomli_w
 
 from rockbench import checks
 from rockbench.errors import ScenarioError
-from rockbench.geometry import Block, Body, Geometry, Prism, Support, stack
+from rockbench.geometry import Block, Body, Cylinder, Geometry, Prism, Support, Upright, stack
 from rockbench.geometry.bodies import vertex_list
 from rockbench.geometry.builders import stack_poses
 from rockbench.scenarios.excitation import Excitation, excitation_from_table
@@ -34,16 +35,39 @@ __all__ = ["load_scenario", "save_scenario", "scenario_from_dict", "scenario_to_
 
 _TOP = {"name", "description", "duration", "output_rate", "gravity", "blocks", "contact",
         "initial", "excitation", "supports"}
-_BLOCK = {"width", "depth", "height", "mass", "density", "chamfer", "offset"}
+_BLOCK = {"width", "depth", "height", "mass", "density", "chamfer", "offset", "radius"}
+_CYLINDER = {"radius", "height", "mass", "density"}
 #: keys that make a block table (and its file) an assembly's
 _POSE = {"x", "z", "angle", "vertices"}
 _ASSEMBLY_BLOCK = (_BLOCK - {"offset"}) | _POSE
 _SUPPORT = {"vertices"}
 _CONTACT = {"friction", "restitution", "eta", "interface_friction"}
-_INITIAL = {"tilt", "tilt_rad"}
+_INITIAL = {"tilt", "tilt_rad", "azimuth", "velocity", "angular_velocity"}
 
 
-def _blocks(raw_blocks: Any) -> tuple[list[Block], list[float]]:
+def _upright(raw: dict[str, Any]) -> Upright:
+    """A block table's Block, or Cylinder where it gives a radius (pose keys taken off)."""
+    if "radius" in raw:
+        extra = set(raw) - _CYLINDER
+        if extra:
+            raise ScenarioError(f"is a cylinder (it has a radius): {', '.join(sorted(extra))} "
+                                f"is for rectangular blocks")
+        if "height" not in raw:
+            raise ScenarioError("is missing height")
+        return Cylinder(**raw)
+    missing = {"width", "depth", "height"} - set(raw)
+    if missing:
+        raise ScenarioError(f"is missing {', '.join(sorted(missing))}")
+    return Block(**raw)
+
+
+def _named(exc: ScenarioError, where: str) -> ScenarioError:
+    """The error with the table it comes from named first."""
+    msg = str(exc)
+    return ScenarioError(f"{where}{' ' if msg.startswith(('is ', 'takes ')) else ': '}{msg}")
+
+
+def _blocks(raw_blocks: Any) -> tuple[list[Upright], list[float]]:
     if not isinstance(raw_blocks, list) or not raw_blocks:
         got = "" if raw_blocks is None else f", got {checks.describe(raw_blocks)}"
         raise ScenarioError(f"scenario needs at least one [[blocks]] table{got}")
@@ -53,13 +77,10 @@ def _blocks(raw_blocks: Any) -> tuple[list[Block], list[float]]:
         raw = checks.table(raw, where)
         checks.no_unknown(raw, _BLOCK, where)
         offsets.append(checks.coordinate(raw.pop("offset", 0.0), f"{where} offset"))
-        missing = {"width", "depth", "height"} - set(raw)
-        if missing:
-            raise ScenarioError(f"{where} is missing {', '.join(sorted(missing))}")
         try:
-            blocks.append(Block(**raw))
+            blocks.append(_upright(raw))
         except ScenarioError as exc:
-            raise ScenarioError(f"{where}: {exc}") from None
+            raise _named(exc, where) from None
     return blocks, offsets
 
 
@@ -94,17 +115,13 @@ def _placed(raw_blocks: Any, raw_supports: Any) -> Geometry:
                     raise ScenarioError("is missing depth")
                 blocks.append(Prism(raw.pop("vertices"), **raw))
             else:
-                missing = {"width", "depth", "height"} - set(raw)
-                if missing:
-                    raise ScenarioError(f"is missing {', '.join(sorted(missing))}")
+                body = _upright(raw)
                 if pose[1] is None:
                     raise ScenarioError("is missing z (the centroid's height) that a "
                                         "rectangle in an assembly needs")
-                blocks.append(Block(**raw))
+                blocks.append(body)
         except ScenarioError as exc:
-            msg = str(exc)
-            raise ScenarioError(f"{where}{' ' if msg.startswith(('is ', 'takes ')) else ': '}"
-                                f"{msg}") from None
+            raise _named(exc, where) from None
         poses.append(pose)
     supports = []
     if raw_supports is not None:
@@ -181,6 +198,11 @@ def scenario_from_dict(data: dict[str, Any], *, source: Path | None = None,
         tilt = rad / lam
     name = checks.text(data.get("name", default_name), "name")
     description = checks.text(data.get("description", ""), "description")
+    azimuth = checks.number(initial.get("azimuth", 0.0), "[initial] azimuth", unit="°")
+    start = {f"initial_{k}": initial[k] for k in ("velocity", "angular_velocity")
+             if k in initial}
+    if azimuth and not tilt:
+        raise ScenarioError("[initial] azimuth points the tilt: give a tilt too")
     return Scenario(
         name=name,
         description=description,
@@ -188,6 +210,8 @@ def scenario_from_dict(data: dict[str, Any], *, source: Path | None = None,
         contact=Contact(**contact_raw),
         excitation=_excitation(data.get("excitation", {"type": "free"}), source, geometry, g),
         initial_tilt=tilt,
+        initial_azimuth=math.radians(azimuth),
+        **start,
         duration=data.get("duration", 10.0),
         output_rate=data.get("output_rate", 1000.0),
         g=g,
@@ -230,9 +254,20 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         "blocks": blocks,
         **({"supports": supports} if supports else {}),
         "contact": scenario.contact.to_dict(),
-        "initial": {"tilt": scenario.initial_tilt},
+        "initial": _initial_table(scenario),
         "excitation": scenario.excitation.to_table(),
     })
+    return out
+
+
+def _initial_table(scenario: Scenario) -> dict[str, Any]:
+    """The ``[initial]`` table: the tilt, and the azimuth (degrees) and velocities if any."""
+    out: dict[str, Any] = {"tilt": scenario.initial_tilt}
+    if scenario.initial_azimuth:
+        out["azimuth"] = math.degrees(scenario.initial_azimuth)
+    if scenario.moving_start:
+        out["velocity"] = list(scenario.initial_velocity)
+        out["angular_velocity"] = list(scenario.initial_angular_velocity)
     return out
 
 

@@ -22,10 +22,7 @@ from __future__ import annotations
 
 import warnings
 
-import numpy as np
-
 from rockbench.errors import PlausibilityWarning
-from rockbench.geometry import Block
 from rockbench.scenarios.excitation import STANDARD_GRAVITY
 from rockbench.scenarios.model import Scenario
 
@@ -42,15 +39,8 @@ PLAUSIBLE_ACCELERATION_G = 3.0
 
 
 def _sizes(scenario: Scenario) -> list[float]:
-    """Every body's extents (m): width, height and depth, or a prism's bounding box."""
-    out: list[float] = []
-    for body in scenario.geometry.bodies:
-        if isinstance(body, Block):
-            out += [body.width, body.height, body.depth]
-        else:
-            v = np.asarray(body.vertices)
-            out += [*(float(x) for x in np.ptp(v, axis=0)), body.depth]
-    return out
+    """Every body's extents (m): width, height and depth (a prism's bounding box)."""
+    return [x for body in scenario.geometry.bodies for x in (body.width, body.height, body.depth)]
 
 
 def review(scenario: Scenario) -> list[str]:

@@ -70,7 +70,7 @@ from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
 from rockbench.engines import engine_class
 from rockbench.errors import RockbenchError
 from rockbench.evaluation import PEAK_FLOOR, RunResult
-from rockbench.geometry import stack
+from rockbench.geometry import Cylinder, stack
 from rockbench.method import Method
 from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Scenario
@@ -488,7 +488,9 @@ def turned(scenario: Scenario) -> Scenario:
     if col is None or not col.centred:
         raise RockbenchError(f"scenario {scenario.name!r}: only centred columns of blocks "
                              f"can be turned")
-    blocks = [dataclasses.replace(b, width=b.depth, depth=b.width) for b in col.blocks]
+    # a cylinder turned about its axis is itself
+    blocks = [b if isinstance(b, Cylinder) else dataclasses.replace(b, width=b.depth, depth=b.width)
+              for b in col.blocks]
     return scenario.replace(geometry=stack(blocks))
 
 
