@@ -52,7 +52,7 @@ from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.drive import AXIS, BaseDrive
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.geometry import Block
+from rockbench.geometry import Block, Cylinder
 from rockbench.scenarios import Scenario
 
 __all__ = ["MujocoEngine", "MujocoSettings"]
@@ -181,7 +181,8 @@ class MujocoEngine(Engine):
     name: ClassVar[str] = "mujoco"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
                                                         chamfer=True, assemblies=True,
-                                                        base_axes="xyz")
+                                                        base_axes="xyz", cylinders=True,
+                                                        start3d=True)
     Settings: ClassVar[type[EngineSettings]] = MujocoSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
@@ -243,9 +244,15 @@ class MujocoEngine(Engine):
         hz = 0.25 * ext + 0.1
         flags = "" if s.multiccd else ' multiccd="disable"'
         assets, bodies = [], []
+        states = scenario.initial_states()
         for i, (blk, (cx, cz, th_i)) in enumerate(zip(blocks, poses, strict=True)):
-            quat = (math.cos(0.5 * th_i), 0.0, math.sin(0.5 * th_i), 0.0)
-            if blk.chamfer > 0 or not isinstance(blk, Block):  # a convex prism
+            pos: tuple[float, ...] = (cx, 0.0, cz)
+            quat: tuple[float, ...] = (math.cos(0.5 * th_i), 0.0, math.sin(0.5 * th_i), 0.0)
+            if scenario.initial_azimuth != 0.0:  # a start out of the x–z plane
+                pos, quat = tuple(states[i, :3]), tuple(states[i, 3:7])
+            if isinstance(blk, Cylinder):
+                shape = f'type="cylinder" size="{_fmt((blk.radius, blk.h))}"'
+            elif blk.chamfer > 0 or not isinstance(blk, Block):  # a convex prism
                 prof = blk.profile()
                 hd = 0.5 * blk.depth
                 verts = [(x, y, z) for y in (-hd, hd) for x, z in prof]
@@ -253,13 +260,13 @@ class MujocoEngine(Engine):
                 shape = f'type="mesh" mesh="prism{i}"'
             else:
                 shape = f'type="box" size="{_fmt((blk.b, 0.5 * blk.depth, blk.h))}"'
-            if isinstance(blk, Block):
+            if isinstance(blk, (Block, Cylinder)):
                 inertia = f'diaginertia="{_fmt(blk.inertia)}"'
             else:  # a polygon's x–z product of inertia is not zero
                 t = blk.inertia_tensor
                 inertia = f'fullinertia="{_fmt((t[0, 0], t[1, 1], t[2, 2], 0.0, t[0, 2], 0.0))}"'
             bodies.append(
-                f'<body name="block{i}" pos="{_fmt((cx, 0.0, cz))}" quat="{_fmt(quat)}">'
+                f'<body name="block{i}" pos="{_fmt(pos)}" quat="{_fmt(quat)}">'
                 f'<freejoint name="free{i}"/>'
                 f'<inertial pos="0 0 0" mass="{_fmt(blk.m)}" {inertia}/>'
                 f'<geom name="geom{i}" {shape} {geom_common}/></body>'
@@ -332,6 +339,14 @@ class MujocoEngine(Engine):
             # past the end); short runs thus precompute only what they use
             per_sample = max(1, math.ceil(1.0 / (scenario.output_rate * self._dt) - 1e-9))
             self._n_drive = drive.steps_until_stop(self._dt) + per_sample + 2
+        if scenario.moving_start:
+            # a free joint's velocity: the centre of mass's in world axes, ω in the body's
+            states = scenario.initial_states()
+            for i, st in enumerate(states):
+                rot = np.empty(9)
+                mujoco.mju_quat2Mat(rot, st[3:7])
+                self._data.qvel[6 * i:6 * i + 3] = st[7:10]
+                self._data.qvel[6 * i + 3:6 * i + 6] = rot.reshape(3, 3).T @ st[10:13]
         mujoco.mj_forward(self._model, self._data)
         return self._dt
 
