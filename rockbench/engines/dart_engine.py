@@ -3,8 +3,11 @@
 DART steps velocity-based (semi-implicit Euler), with a linear complementarity problem
 (``lcp_solver``, Dantzig by default) for contacts and friction. Each block is a
 ``Skeleton`` on a ``FreeJoint`` with the block's mass and full inertia tensor and one
-shape: a box, or a triangle mesh of the prism for a convex prism (a chamfered block: by
-default the box spanned by its flat faces, or its prism mesh, ``chamfer_shape``). The
+shape: a box, a triangle mesh of the prism for a convex prism (a chamfered block: by
+default the box spanned by its flat faces, or its prism mesh, ``chamfer_shape``), or
+DART's ``CylinderShape`` (axis along body z; FCL's primitive cylinder) for a cylinder.
+Bodies start at ``Scenario.initial_states()`` when the start leaves the x–z plane or
+moves (rotation vector and translation, velocities in world axes). The
 base is a box skeleton (top face z = 0) on a ``PrismaticJoint`` along x (a base that
 moves along x only: the planar benchmark's model) or a ``TranslationalJoint`` (x, y and
 z: a base that also moves along y or z) whose ``VELOCITY`` actuator is commanded every
@@ -25,7 +28,9 @@ Presets and knobs:
 * ``timestep``, ``collision_detector``, ``lcp_solver``, ``split_impulse``,
   ``restitution_mode``, ``chamfer_shape``, ``base_drive``.
 
-Known limits: arches are unstable with ODE's meshes (``fast``); walls are costly (the
+Known limits: arches are unstable with ODE's meshes (``fast``), and ODE's cylinder
+contact does not hold a rolling rim (a precessing cylinder needs FCL); DART's own
+detector has no cylinders; walls are costly (the
 contact LCP grows with the bricks); an interface friction below the base's is
 unsupported on assemblies.
 
@@ -42,11 +47,12 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.geometry import Block, Support
+from rockbench.geometry import Block, Cylinder, Support
 from rockbench.scenarios import Scenario
 
 __all__ = ["DartEngine", "DartSettings"]
@@ -68,7 +74,9 @@ class DartSettings(EngineSettings):
         Narrow-phase library. FCL is the most accurate with the box ground and
         with meshes (chamfers); ODE is the cheapest and the most accurate at a
         coarse (1 ms) step; DART's own detector handles boxes only, so it
-        cannot model chamfered blocks.
+        cannot model chamfered blocks nor cylinders. FCL collides a cylinder as its
+        primitive; ODE's cylinder–box contact does not hold a rolling rim and
+        Bullet's rounds it (its collision margin), so rolling cylinders need FCL.
     lcp_solver : {"dantzig", "pgs"}
         Boxed-LCP solver of the contact problem. Dantzig (pivoting, exact) is
         DART's default; PGS (projected Gauss-Seidel, iterative; DART's fallback
@@ -169,6 +177,23 @@ def _add_shape(body: Any, shape: Any, friction: float, restitution: float,
     dyn.setRestitutionCoeff(restitution)
 
 
+def _place(joint: Any, skel: Any, state: np.ndarray) -> None:
+    """Put a body on a ``FreeJoint`` at a state of :meth:`Scenario.initial_states`.
+
+    ``state`` is the centre of mass (x, y, z), the quaternion (w, x, y, z) and
+    the velocity and angular velocity (world axes). The joint's positions are
+    the rotation vector then the translation; the velocities are set in the
+    world frame through the joint's helpers (the body origin is its centre of
+    mass, so the origin's velocity is the centre of mass's).
+    """
+    w, x, y, z = state[3:7]
+    rotvec = Rotation.from_quat([x, y, z, w]).as_rotvec()
+    skel.setPositions(np.concatenate([rotvec, state[:3]]))
+    skel.setVelocities(np.zeros(6))
+    joint.setLinearVelocity(np.asarray(state[7:10], float))
+    joint.setAngularVelocity(np.asarray(state[10:13], float))
+
+
 def _rectangle(support: Support) -> bool:
     """True if a support is an axis-aligned rectangle (a box)."""
     v = support.array
@@ -181,7 +206,8 @@ class DartEngine(Engine):
     name: ClassVar[str] = "dart"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
                                                         chamfer=True, assemblies=True,
-                                                        base_axes="xyz")
+                                                        base_axes="xyz", cylinders=True,
+                                                        start3d=True)
     Settings: ClassVar[type[EngineSettings]] = DartSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {"timestep": 2.5e-5, "collision_detector": "fcl"},
@@ -229,8 +255,9 @@ class DartEngine(Engine):
                 not all(isinstance(b, Block) for b in scenario.blocks)
                 or not all(_rectangle(sup) for sup in supports)):
             raise UnsupportedScenario(
-                "DART's own collision detector has no mesh support, so an assembly's "
-                "polygonal blocks and supports need collision_detector fcl/ode/bullet")
+                "DART's own collision detector has no mesh or cylinder support, so an "
+                "assembly's polygonal blocks and supports, and cylinders, need "
+                "collision_detector fcl/ode/bullet")
         dt = float(s.timestep)
         dart = self.library("dartpy")
         world = dart.simulation.World()
@@ -295,11 +322,17 @@ class DartEngine(Engine):
 
         # blocks: one skeleton each, free joint at the centroid
         poses = scenario.initial_poses()
+        # a 3D or moving start: each body's pose and velocities from initial_states()
+        states = (None if scenario.planar_start and not scenario.moving_start
+                  else scenario.initial_states())
         self._skels = []
         for i, (blk, (cx, cz, th)) in enumerate(zip(scenario.blocks, poses, strict=True)):
             skel = dart.dynamics.Skeleton(f"block{i}")
-            _, bn = skel.createFreeJointAndBodyNodePair()
-            if not isinstance(blk, Block):  # an assembly's convex prism
+            free, bn = skel.createFreeJointAndBodyNodePair()
+            if isinstance(blk, Cylinder):  # the native cylinder, its axis along body z
+                shape = dart.dynamics.CylinderShape(blk.radius, blk.height)
+                tensor = np.diag(blk.inertia)
+            elif not isinstance(blk, Block):  # an assembly's convex prism
                 shape = _prism_shape(blk.profile(), blk.depth)
                 tensor = blk.inertia_tensor  # the x–z product of inertia is not zero
             else:
@@ -313,9 +346,12 @@ class DartEngine(Engine):
             block_mu = mu_if if column is None or i > 0 else max(mu, mu_if)
             _add_shape(bn, shape, block_mu, e_body)
             bn.setInertia(dart.dynamics.Inertia(blk.m, np.zeros(3), tensor))
-            # FreeJoint coordinates: rotation vector (about +y by θ), then translation
-            skel.setPositions(np.array([0.0, th, 0.0, cx, 0.0, cz]))
-            skel.setVelocities(np.zeros(6))
+            if states is None:
+                # FreeJoint coordinates: rotation vector (about +y by θ), then translation
+                skel.setPositions(np.array([0.0, th, 0.0, cx, 0.0, cz]))
+                skel.setVelocities(np.zeros(6))
+            else:
+                _place(free, skel, states[i])
             world.addSkeleton(skel)
             self._skels.append(skel)
 
