@@ -13,8 +13,11 @@ from engine_helpers import (  # noqa: E402
     check_arch_rides_its_supports,
     check_assembly_stays_at_rest,
     check_base_drives_y_and_z,
+    check_corner_release,
+    check_cylinder_rocks_like_housner,
     check_rides_a_base_along_y,
     check_rocks_about_x_like_housner,
+    check_steady_precession,
     check_tilting_table,
     inclined_scene,
     lam,
@@ -22,13 +25,13 @@ from engine_helpers import (  # noqa: E402
 )
 
 from rockbench.analytic.housner import single_block_reference  # noqa: E402
-from rockbench.engines import SettingsError, get_engine  # noqa: E402
+from rockbench.engines import EngineSettings, SettingsError, get_engine  # noqa: E402
 from rockbench.engines.bullet_engine import (  # noqa: E402
     BulletEngine,
     BulletSettings,
     principal_frame,
 )
-from rockbench.geometry import Block, Prism  # noqa: E402
+from rockbench.geometry import Block, Cylinder, Prism  # noqa: E402
 from rockbench.metrics import impact_times  # noqa: E402
 from rockbench.scenarios import Contact, Scenario, SinePulse, get_scenario  # noqa: E402
 from rockbench.trajectory import Status  # noqa: E402
@@ -269,3 +272,64 @@ def test_a_base_moving_along_y_carries_the_block() -> None:
 def test_a_block_excited_along_y_rocks_about_x_like_housner() -> None:
     # measured: the roll within 7.4e-4 λ of −θ_ref
     check_rocks_about_x_like_housner(BulletEngine(), plane_tol=1e-5)
+
+
+# ---------------------------------------------------------------- cylinders and 3D starts
+# Measured (docs/engines/bullet.md, "Cylinders and 3D starts"): the drum's first impact
+# +0.031 % (accurate) / −0.099 % (fast), roll and twist ≤ 2.7e-7 / 3.1e-7 rad; the corner
+# landing −0.009 % / −0.127 %, |θ + roll| ≤ 1.2e-9 / 1.3e-6 rad; the 5 s precession's tilt
+# within 9.4e-5 / 1.11e-3 rad of 0.2, its rate −0.048 % / −0.012 %.
+@pytest.mark.parametrize(("preset", "rel", "plane_tol"),
+                         [("accurate", 6e-4, 5e-7), ("fast", 2e-3, 6e-7)])
+def test_cylinder_rocks_like_housner(preset: str, rel: float, plane_tol: float) -> None:
+    check_cylinder_rocks_like_housner(BulletEngine(), preset, rel=rel, plane_tol=plane_tol)
+
+
+@pytest.mark.parametrize(("preset", "rel", "diagonal_tol"),
+                         [("accurate", 1.8e-4, 2.4e-9), ("fast", 2.5e-3, 2.5e-6)])
+def test_corner_release(preset: str, rel: float, diagonal_tol: float) -> None:
+    check_corner_release(BulletEngine(), preset, rel=rel, diagonal_tol=diagonal_tol)
+
+
+@pytest.mark.parametrize(("preset", "tilt_tol", "rate_rtol"),
+                         [("accurate", 1.5e-4, 9e-4), ("fast", 2e-3, 2.2e-4)])
+def test_steady_precession(preset: str, tilt_tol: float, rate_rtol: float) -> None:
+    check_steady_precession(BulletEngine(), preset, tilt_tol=tilt_tol, rate_rtol=rate_rtol,
+                            duration=5.0)
+
+
+class _ShapeProbe(BulletEngine):
+    """Reads the first body's dynamics (and, from a multibody, its collision shape) back
+    from pybullet at build."""
+
+    def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
+        dt = super()._build(scenario, settings)
+        pb, body, cid = self._pb, self._bodies[0], self._cid
+        self.dynamics = pb.getDynamicsInfo(body, -1, physicsClientId=cid)
+        # pybullet reads shapes back from multibodies only, not from a btRigidBody
+        assert isinstance(settings, BulletSettings)
+        if not settings.maximal_coordinates:
+            self.shape = pb.getCollisionShapeData(body, -1, physicsClientId=cid)[0]
+        return dt
+
+
+def test_a_cylinder_is_built_as_a_cylinder() -> None:
+    import pybullet as pb
+
+    drum = Cylinder(0.15, 1.0, density=2500.0)
+    sc = Scenario("drum-rest", drum, duration=0.5)
+    BulletEngine().check_supported(sc)  # raises UnsupportedScenario if not
+    for maximal in (True, False):
+        probe = _ShapeProbe()
+        tr = probe.simulate(sc, {"preset": "accurate", "maximal_coordinates": maximal})
+        assert tr.status is Status.OK
+        # the cylinder's mass and inertia, not those of a default density
+        assert probe.dynamics[0] == pytest.approx(drum.m, rel=1e-12)
+        assert probe.dynamics[2] == pytest.approx(drum.inertia, rel=1e-12)
+        # standing on its base it stays at rest, its centre H/2 above the ground
+        assert np.max(np.abs(tr.z[:, 0] - drum.h)) < 1e-6
+        assert np.max(np.abs(tr.x)) < 1e-6 and np.max(np.abs(tr.y)) < 1e-6
+        assert np.max(tr.tilt) < 1e-6
+    # Bullet's own cylinder: (.., geometry type, dimensions (height, radius, ..), ..)
+    assert probe.shape[2] == pb.GEOM_CYLINDER
+    assert probe.shape[3][:2] == pytest.approx((drum.height, drum.radius), rel=1e-12)

@@ -11,6 +11,12 @@ ignores a static body's velocity, which would then not drag a block through
 friction): the secant velocity (u_g(t_{i+1}) − u_g(t_i)) / dt of the step, along x, y
 and z, its position reset to u_g once per output sample. Fixed supports are bodies of
 the ground's kind, moved with it. No damping, no sleeping.
+A :class:`~rockbench.geometry.Cylinder` is Bullet's own cylinder (``GEOM_CYLINDER``, its
+axis along the body's z) with the cylinder's mass and inertia and the hulls' collision
+margin. A start tilted toward an azimuth is placed from
+:meth:`~rockbench.scenarios.Scenario.initial_states` (centre of mass, quaternion), one in
+the x–z plane from the poses as before; a moving start gets the states' world-frame
+velocity of the centre of mass (the body's origin) and angular velocity.
 Bullet multiplies the friction and restitution of the two bodies in contact, so each
 body gets coefficients whose products are the scenario's
 (:func:`~rockbench.engines.friction.product_frictions`). The base motion is applied
@@ -47,7 +53,7 @@ from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.friction import product_frictions
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.geometry import Block, Support
+from rockbench.geometry import Block, Cylinder, Support
 from rockbench.geometry.polygon import rotate
 from rockbench.scenarios import Scenario
 
@@ -201,7 +207,8 @@ class BulletEngine(Engine):
     name: ClassVar[str] = "bullet"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
                                                          chamfer=True, assemblies=True,
-                                                         base_axes="xyz")
+                                                         base_axes="xyz", cylinders=True,
+                                                         start3d=True)
     Settings: ClassVar[type[EngineSettings]] = BulletSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         # 0.1 ms steps (fps 1000 × 10 sub-steps), every solver pass run: ≤ 5e-3 λ on the
@@ -339,24 +346,40 @@ class BulletEngine(Engine):
             self._supports.append((body, px, pz))
 
         poses = scenario.initial_poses()
+        # a start in the x–z plane is placed from its (x, z, angle) poses, as always; one
+        # tilted toward an azimuth from the 3D states (position, quaternion)
+        states = scenario.initial_states()
+        planar = scenario.initial_azimuth == 0.0
         self._bodies: list[int] = []
         # (block index, cos φ/2, sin φ/2) of the bodies whose frame is turned by φ from
         # the block's (prisms: their principal frame)
         self._turns: list[tuple[int, float, float]] = []
         for i, (blk, (cx, cz, th), mu) in enumerate(zip(blocks, poses, mus[1:], strict=True)):
-            if isinstance(blk, Block):
+            if isinstance(blk, (Block, Cylinder)):
                 phi, inertia = 0.0, tuple(float(j) for j in blk.inertia)
             else:
                 phi, inertia = principal_frame(blk.inertia_tensor)
                 if phi != 0.0:
                     self._turns.append((i, math.cos(0.5 * phi), math.sin(0.5 * phi)))
-            a = th + phi
-            shape = self._block_shape(blk, s, phi)
-            body = pb.createMultiBody(blk.m, shape, basePosition=(float(cx), 0.0, float(cz)),
-                                      baseOrientation=(0.0, math.sin(0.5 * a), 0.0,
-                                                       math.cos(0.5 * a)),
+            pos: tuple[float, ...]
+            if planar:
+                a = th + phi
+                pos = (float(cx), 0.0, float(cz))
+                orn = (0.0, math.sin(0.5 * a), 0.0, math.cos(0.5 * a))
+            else:  # a tilted column: blocks and cylinders, whose frames are principal
+                pos = tuple(float(v) for v in states[i, :3])
+                w, x, y, z = (float(v) for v in states[i, 3:7])
+                orn = (x, y, z, w)  # pybullet's order
+            shape = self._cylinder_shape(blk) if isinstance(blk, Cylinder) \
+                else self._block_shape(blk, s, phi)
+            body = pb.createMultiBody(blk.m, shape, basePosition=pos, baseOrientation=orn,
                                       useMaximalCoordinates=s.maximal_coordinates, **kw)
             self._set_dynamics(body, mu, rest, blk, inertia=inertia)
+            if scenario.moving_start:
+                # world-frame velocity of the centre of mass (the body's origin: no
+                # inertial offset) and world-frame angular velocity
+                pb.resetBaseVelocity(body, tuple(float(v) for v in states[i, 7:10]),
+                                     tuple(float(v) for v in states[i, 10:13]), **kw)
             self._bodies.append(body)
         self._poses = np.empty((len(blocks), 7))
 
@@ -405,6 +428,15 @@ class BulletEngine(Engine):
                 shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=verts, **kw)
         if shape < 0:  # pragma: no cover - pybullet signals failure by -1
             raise RuntimeError("pybullet could not create the block collision shape")
+        return shape
+
+    def _cylinder_shape(self, blk: Cylinder) -> int:
+        """Collision shape of a cylinder: Bullet's own, its axis along the body's z."""
+        pb, kw = self._pb, self._kw
+        shape = pb.createCollisionShape(pb.GEOM_CYLINDER, radius=blk.radius, height=blk.height,
+                                        **kw)
+        if shape < 0:  # pragma: no cover - pybullet signals failure by -1
+            raise RuntimeError("pybullet could not create the cylinder collision shape")
         return shape
 
     def _support_shape(self, sup: Support, depth: float) -> tuple[int, tuple[float, float]]:
