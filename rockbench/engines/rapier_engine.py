@@ -11,9 +11,15 @@ Scene: each block is a dynamic body whose frame is the block's (origin at its ce
 of gravity), with one collider: a cuboid, the box spanning a chamfered block's flat
 faces (its rocking pivots), or the rounded convex hull of a polygonal prism; its mass
 and inertia are set explicitly (a prism's principal frame as the inertia's local
-frame). The base is a KINEMATIC velocity-based body carrying a cuboid whose top face is
-z = 0 and the fixed supports (more colliders of it: they move with the base). The
-blocks are free in 3D (``planar`` holds them in the x–z plane by joints to the base).
+frame). A cylinder is Rapier's cylinder collider, turned so that its axis is the body's z,
+with its mass and inertia set explicitly. The base is a KINEMATIC velocity-based body
+carrying a cuboid whose top face is z = 0 (the half-space z ≤ 0 in a scene with a
+cylinder: parry's cylinder–cuboid contact drops a rolling rim's contact for steps at a
+time) and the fixed supports (more colliders of it: they move with the base). A start in
+the x–z plane at rest is placed from ``initial_poses`` as it always was (bit-identical
+planar results); any other from ``initial_states``: position, quaternion, velocity of the
+centre of gravity and angular velocity, in world axes. The blocks are free in 3D
+(``planar`` holds them in the x–z plane by joints to the base).
 No damping, no sleeping, no CCD unless asked. Rapier combines the coefficients of two
 colliders by the higher of their combine rules: every collider's rule is ``MULTIPLY``
 and its coefficients the product-splitting ones
@@ -61,7 +67,7 @@ from rockbench.engines.bullet_engine import principal_frame
 from rockbench.engines.friction import product_frictions
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.geometry import Block, Support
+from rockbench.geometry import Block, Cylinder, Support
 from rockbench.scenarios import Scenario
 
 __all__ = ["RapierEngine", "RapierSettings"]
@@ -197,7 +203,8 @@ class RapierEngine(Engine):
     name: ClassVar[str] = "rapier"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
                                                         chamfer=True, assemblies=True,
-                                                        base_axes="xyz")
+                                                        base_axes="xyz", cylinders=True,
+                                                        start3d=True)
     Settings: ClassVar[type[EngineSettings]] = RapierSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         # calibration: docs/engines/rapier.md
@@ -292,8 +299,14 @@ class RapierEngine(Engine):
         half_x = max(1.0, 2.0 * reach)
         half_y = max(1.0, 2.0 * reach, depth)
         half_z = max(0.5, 0.5 * geo.total_height)
-        ground = material(r.Collider.cuboid(half_x, half_y, half_z)
-                          .translation((0.0, 0.0, -half_z)), mus[0])
+        if scenario.has_cylinders:
+            # the half-space z ≤ 0: parry's cylinder–cuboid manifold drops the contact
+            # of a cylinder rolling on its rim for steps at a time, the half-space's
+            # (the cylinder's support feature clipped against the plane) holds it
+            ground = material(r.Collider.halfspace((0.0, 0.0, 1.0)), mus[0])
+        else:
+            ground = material(r.Collider.cuboid(half_x, half_y, half_z)
+                              .translation((0.0, 0.0, -half_z)), mus[0])
         # the supports are more colliders of the base (at rest the base frame is the world's)
         colliders = [ground] + [
             material(self._support_collider(r, sup, depth, s.hull_radius), mus[0])
@@ -308,12 +321,22 @@ class RapierEngine(Engine):
             .contacts_enabled(True).build()
 
         self._bodies = []
-        for blk, (cx, cz, th), mu in zip(blocks, scenario.initial_poses(), mus[1:],
-                                         strict=True):
-            collider = material(self._block_collider(r, blk, s.hull_radius), mu)
-            builder = (r.RigidBody.dynamic().translation((float(cx), 0.0, float(cz)))
-                       .rotation((0.0, float(th), 0.0)).linear_damping(0.0)
-                       .angular_damping(0.0).can_sleep(False).ccd_enabled(s.ccd))
+        # a start in the x–z plane at rest is placed from its (x, z, angle) poses, as
+        # always; any other from its 3D states (position, quaternion, velocities)
+        in_plane = scenario.initial_azimuth == 0.0 and not scenario.moving_start
+        states = scenario.initial_states()
+        for i, (blk, (cx, cz, th), mu) in enumerate(zip(blocks, scenario.initial_poses(),
+                                                        mus[1:], strict=True)):
+            shape = self._cylinder_collider(r, blk) if isinstance(blk, Cylinder) \
+                else self._block_collider(r, blk, s.hull_radius)
+            collider = material(shape, mu)
+            if in_plane:
+                builder = r.RigidBody.dynamic().translation((float(cx), 0.0, float(cz))) \
+                    .rotation((0.0, float(th), 0.0))
+            else:
+                builder = self._start_3d(r, states[i])
+            builder = builder.linear_damping(0.0).angular_damping(0.0).can_sleep(False) \
+                .ccd_enabled(s.ccd)
             handle = world.add_body(builder, [collider])
             self._bodies.append(world.rigid_bodies[handle])
             if s.planar:
@@ -391,6 +414,36 @@ class RapierEngine(Engine):
                                  principal_inertia_local_frame=(
                                      0.0, math.sin(0.5 * phi), 0.0, math.cos(0.5 * phi)))
         return builder.mass_properties(props)
+
+    @staticmethod
+    def _cylinder_collider(r: Any, blk: Cylinder) -> Any:
+        """A cylinder's collider in its body frame (origin at the centre of gravity), with
+        the cylinder's mass and inertia.
+
+        Rapier's cylinder has its axis along its local y: the collider is turned by
+        +90° about x (its y onto the body's z). Its mass properties are given in the
+        collider's frame, the axial moment I3 about its y, so that the body gets
+        (I1, I1, I3) about its x, y and z.
+        """
+        i1, _, i3 = (float(j) for j in blk.inertia)
+        props = r.MassProperties(local_com=(0.0, 0.0, 0.0), mass=float(blk.m),
+                                 principal_inertia=(i1, i3, i1),
+                                 principal_inertia_local_frame=(0.0, 0.0, 0.0, 1.0))
+        return r.Collider.cylinder(float(blk.h), float(blk.radius)) \
+            .rotation((0.5 * math.pi, 0.0, 0.0)).mass_properties(props)
+
+    @staticmethod
+    def _start_3d(r: Any, state: np.ndarray) -> Any:
+        """A dynamic body's builder at a 3D state of :meth:`Scenario.initial_states`.
+
+        ``state`` is (x, y, z, w, qx, qy, qz, vx, vy, vz, ωx, ωy, ωz) in world axes. The
+        body's origin is its centre of gravity, so Rapier's linear velocity (that of the
+        centre of mass) is the state's; its angular velocity is in world axes, as the
+        state's. ``Rotation3`` takes (w, x, y, z), unlike Rapier's (x, y, z, w) tuples.
+        """
+        x, y, z, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz = (float(v) for v in state)
+        pose = r.Isometry3((x, y, z), r.Rotation3(qw, qx, qy, qz))
+        return r.RigidBody.dynamic().position(pose).linvel((vx, vy, vz)).angvel((wx, wy, wz))
 
     @staticmethod
     def _support_collider(r: Any, sup: Support, depth: float, radius: float) -> Any:
