@@ -25,7 +25,7 @@ from rockbench.geometry import Block, drum_column
 from rockbench.method import Method
 from rockbench.runner import ExecutionOptions
 from rockbench.scenarios import Contact, Scenario, SinePulse, get_scenario
-from rockbench.studies.convergence import _estimate, converge
+from rockbench.studies.convergence import _estimate, _history_change, converge, response
 from rockbench.studies.verdict import Trust, judge_closed_form
 from rockbench.studies.verify import VerifyOptions, run_verification
 from rockbench.trajectory import Trajectory
@@ -229,3 +229,24 @@ def test_compare_puts_the_verdict_first(tmp_path: Path) -> None:
     write_report(result, ReportOptions(tmp_path))
     html = (tmp_path / "index.html").read_text()
     assert html.index("Verdict: which method to trust here") < html.index("Overview")
+
+
+def _leaning(theta: np.ndarray, roll: np.ndarray) -> Trajectory:
+    t = np.linspace(0.0, 1.0, theta.size)
+    zero = np.zeros((t.size, 1))
+    return Trajectory(t=t, theta=theta[:, None], x=zero, z=zero, wobble=zero, y=zero,
+                      roll=roll[:, None], twist=zero)
+
+
+def test_a_run_out_of_plane_is_judged_on_its_tilt_and_its_roll() -> None:
+    """A run rocking on a corner: its peak is its tilt about any axis, and two rungs with the
+    same θ whose roll differs (one leaves the diagonal) do not agree."""
+    s = np.sin(np.linspace(0.0, math.pi, 101))
+    on_diagonal = _leaning(0.1 * s, -0.1 * s)
+    off = _leaning(0.1 * s, -0.05 * s)
+    peak = response(on_diagonal, 0.2).peaks[0]
+    assert peak == pytest.approx(math.atan(math.hypot(math.tan(0.1), math.tan(0.1))) / 0.2)
+    assert _history_change(on_diagonal, off, 0.2, None) == pytest.approx(0.05 / 0.2)
+    planar = _leaning(0.1 * s, 0.0 * s)
+    assert response(planar, 0.2).peaks[0] == pytest.approx(0.1 / 0.2)
+    assert _history_change(planar, _leaning(0.1 * s, 0.0 * s), 0.2, None) == 0.0

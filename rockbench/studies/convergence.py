@@ -70,7 +70,8 @@ class ConvergenceTolerances:
     overturn_time : float
         Relative difference of the overturning time.
     history : float
-        max |θ_k − θ_{k−1}|/λ over the samples up to the horizon.
+        max |θ_k − θ_{k−1}|/λ over the samples up to the horizon (and of the roll
+        where a rung left the x–z plane).
     """
 
     peak: float = 0.02
@@ -87,7 +88,8 @@ class Response:
     status : Status
         How it ended.
     peaks : tuple of float
-        max |θ_i|/λ of each block up to the horizon (NaN where unknown).
+        max |θ_i|/λ of each block up to the horizon (NaN where unknown); in a run that
+        left the x–z plane, the largest tilt about any horizontal axis over λ.
     overturn_time : float or None
         When it overturned (the end of the run; None if it did not).
     """
@@ -107,7 +109,7 @@ def response(traj: Trajectory, lam: float, horizon: float | None = None) -> Resp
     n = traj.t.size
     if horizon is not None:
         n = int(np.searchsorted(traj.t, horizon, side="right"))
-    peaks = (tuple(float(p) for p in np.max(np.abs(traj.theta[:n]), axis=0) / lam) if n
+    peaks = (tuple(float(p) for p in np.max(_lean(traj)[:n], axis=0) / lam) if n
              else (math.nan,) * traj.n_blocks)
     over = float(traj.t[-1]) if traj.status is Status.OVERTURNED and traj.t.size else None
     return Response(traj.status, peaks, over)
@@ -120,7 +122,16 @@ def _history_change(a: Trajectory, b: Trajectory, lam: float, horizon: float | N
         n = min(n, int(np.searchsorted(a.t, horizon, side="right")))
     if n == 0:
         return math.nan
-    return float(np.max(np.abs(a.theta[:n] - b.theta[:n]))) / lam
+    change = np.abs(a.theta[:n] - b.theta[:n])
+    if not (a.planar and b.planar):  # a rung that left the plane: its roll counts too
+        change = np.maximum(change, np.abs(a.roll[:n] - b.roll[:n]))
+    return float(np.max(change)) / lam
+
+
+def _lean(traj: Trajectory) -> np.ndarray:
+    """|θ| of each sample, or its tilt about any horizontal axis where the run left the
+    x–z plane (a block rocking on a corner leans along its diagonal)."""
+    return np.abs(traj.theta) if traj.planar else traj.tilt
 
 
 @dataclass(frozen=True)
