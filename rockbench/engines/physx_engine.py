@@ -13,7 +13,12 @@ threads (everything on the calling thread: bit-identical runs, no oversubscripti
 Scene: each block is a dynamic body whose frame is the block's (origin at its centre of
 gravity), with one shape: a box, or the convex mesh of its prism (polygonal prisms and,
 by default, chamfered blocks: ``chamfer_shape``); mass and inertia are set explicitly (a
-prism's principal frame as the mass frame). The base is a box whose top face is z = 0
+prism's principal frame as the mass frame). A :class:`~rockbench.geometry.Cylinder` is
+SAPIEN's cylinder (a PhysX convex mesh of 32 segments, its axis along the shape's x, turned
+onto the body's z) with the cylinder's mass and inertia. A start in the x–z plane at rest
+is placed from ``initial_poses`` (bit-identical planar runs); any other from
+``initial_states``: position, quaternion, the centre of mass's velocity and the angular
+velocity, in world axes. The base is a box whose top face is z = 0
 carrying the fixed supports as more shapes: a static body on a still base, a kinematic
 body under a moving one, driven by ``set_kinematic_target`` to the base's displacement at
 the end of every step (PhysX moves it there and gives its contacts the step's secant
@@ -58,7 +63,7 @@ from rockbench.engines.bullet_engine import principal_frame
 from rockbench.engines.friction import mean_frictions
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.geometry import Block, Support
+from rockbench.geometry import Block, Cylinder, Support
 from rockbench.scenarios import Scenario
 
 __all__ = ["PhysxEngine", "PhysxSettings"]
@@ -177,7 +182,8 @@ class PhysxEngine(Engine):
     name: ClassVar[str] = "physx"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
                                                         chamfer=True, assemblies=True,
-                                                        base_axes="xyz")
+                                                        base_axes="xyz", cylinders=True,
+                                                        start3d=True)
     Settings: ClassVar[type[EngineSettings]] = PhysxSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         # calibration: docs/engines/physx.md
@@ -311,15 +317,25 @@ class PhysxEngine(Engine):
         self._base = base
 
         locked = [False, True, False, True, False, True] if s.planar else [False] * 6
+        # a start in the x–z plane at rest is placed from its (x, z, angle) poses, as
+        # always; any other from its 3D states (position, quaternion, velocities)
+        in_plane = scenario.initial_azimuth == 0.0 and not scenario.moving_start
+        states = scenario.initial_states()
         self._bodies = []
-        for blk, (cx, cz, th), mu in zip(blocks, scenario.initial_poses(), mus[1:],
-                                         strict=True):
+        for i, (blk, (cx, cz, th), mu) in enumerate(zip(blocks, scenario.initial_poses(),
+                                                        mus[1:], strict=True)):
             mat = px.PhysxMaterial(mu, mu, e)
             body = px.PhysxRigidDynamicComponent()
-            body.attach(shaped(self._block_shape(px, blk, s, mat)))
-            # the block's own mass and inertia (a chamfered block's cut corners neglected,
-            # as the analytic models do); a prism's principal frame is turned by φ about y
-            phi, moments = principal_frame(blk.inertia_tensor)
+            if isinstance(blk, Cylinder):
+                body.attach(shaped(self._cylinder_shape(sapien, px, blk, mat)))
+                # its own mass and inertia, its principal axes the body's
+                phi, moments = 0.0, tuple(float(j) for j in blk.inertia)
+            else:
+                body.attach(shaped(self._block_shape(px, blk, s, mat)))
+                # the block's own mass and inertia (a chamfered block's cut corners
+                # neglected, as the analytic models do); a prism's principal frame is
+                # turned by φ about y
+                phi, moments = principal_frame(blk.inertia_tensor)
             body.mass = float(blk.m)
             body.inertia = np.array(moments, dtype=np.float32)
             body.cmass_local_pose = sapien.Pose(q=np.array(
@@ -334,10 +350,21 @@ class PhysxEngine(Engine):
             body.set_locked_motion_axes(locked)
             ent = sapien.Entity()
             ent.add_component(body)
-            ent.pose = sapien.Pose(
-                np.array([cx, 0.0, cz], dtype=np.float32),
-                np.array([math.cos(0.5 * th), 0.0, math.sin(0.5 * th), 0.0], dtype=np.float32))
+            if in_plane:
+                ent.pose = sapien.Pose(
+                    np.array([cx, 0.0, cz], dtype=np.float32),
+                    np.array([math.cos(0.5 * th), 0.0, math.sin(0.5 * th), 0.0],
+                             dtype=np.float32))
+            else:
+                # SAPIEN's quaternions are (w, x, y, z), as the states'
+                ent.pose = sapien.Pose(states[i, :3].astype(np.float32),
+                                       states[i, 3:7].astype(np.float32))
             scene.add_entity(ent)
+            if scenario.moving_start:
+                # PhysX's velocities are the centre of mass's (the body's origin: the mass
+                # frame is only turned) and the angular one, both in world axes
+                body.linear_velocity = states[i, 7:10].astype(np.float32)
+                body.angular_velocity = states[i, 10:13].astype(np.float32)
             self._bodies.append(body)
         self._scene, self._system = scene, system
         # pack() lists every dynamic body (the kinematic base too) in the system's own
@@ -370,6 +397,20 @@ class PhysxEngine(Engine):
             return px.PhysxCollisionShapeBox(np.array([half_x, hy, blk.h], dtype=np.float32),
                                              mat)
         return cls._convex(px, blk.profile(), hy, mat)
+
+    @staticmethod
+    def _cylinder_shape(sapien: Any, px: Any, blk: Cylinder, mat: Any) -> Any:
+        """A cylinder's shape in its body frame (origin at its centre of gravity).
+
+        SAPIEN's cylinder is a PhysX convex mesh of 32 segments (a regular 32-gon prism
+        inscribed in the circle, scaled to the radius and half-length) with its axis
+        along its local x: the shape is turned by −90° about y (its x onto the body's z),
+        which puts two of the polygon's vertices on the body's ±x axis.
+        """
+        shape = px.PhysxCollisionShapeCylinder(float(blk.radius), float(blk.h), mat)
+        c = math.sqrt(0.5)
+        shape.set_local_pose(sapien.Pose(q=np.array([c, 0.0, -c, 0.0], dtype=np.float32)))
+        return shape
 
     @classmethod
     def _support_shape(cls, sapien: Any, px: Any, sup: Support, depth: float, mat: Any) -> Any:
