@@ -21,7 +21,13 @@ volume (a box's exactly, a hull's with the cut corners of a chamfer), and culver
 reports the centre of mass as the body's position. The base is a box whose top face is
 z = 0, and each fixed support is one more body (a box or a hull): static on a still
 base, kinematic under a moving one. The blocks are free in 3D (``planar`` restricts
-them to the x–z plane through Jolt's allowed degrees of freedom). Bodies exist in Jolt
+them to the x–z plane through Jolt's allowed degrees of freedom).
+A :class:`~rockbench.geometry.Cylinder` is Jolt's cylinder (``SHAPE_CYLINDER``, its axis
+along its local y): its Jolt body is the cylinder's frame turned by +90° about x, its mass
+given, Jolt scaling the cylinder's exact inertia to it. A start in the x–z plane at rest is
+placed from ``initial_poses`` as it always was; any other from ``initial_states``
+(position, quaternion, then the velocity of the centre of mass and the angular velocity,
+in world axes, once the bodies exist). Bodies exist in Jolt
 only after culverin's first step: the scene is committed with a step of length 0.
 
 The convex radius rounds the shapes that Jolt's GJK sees, but contacts between a
@@ -46,6 +52,10 @@ to u_g(t_{i+1}); its position is reset to the exact u_g at the first step of eve
 (once per output sample). The blocks are woken at every call: a block at rest for half
 a second falls asleep, and sleeping cannot be turned off through culverin.
 
+Gyroscopic torque: Jolt leaves −ω × Iω out unless asked, and culverin does not ask; with
+``gyroscopic`` the engine adds it before each step (Jolt's own form) to the boxes and
+cylinders of a scene with a cylinder or a start out of the x–z plane.
+
 Presets and knobs:
 
 * ``accurate`` (the defaults): dt 0.1 ms, Jolt's damping cancelled and its dropped
@@ -55,7 +65,8 @@ Presets and knobs:
   damping left on. Its step is longer than the 1 ms output interval of the catalog's
   scenarios, which the base loop refuses: it runs scenarios whose ``output_rate`` is at
   most 60 per second.
-* ``timestep``, ``cancel_damping``, ``planar``, ``ccd``, ``chamfer_shape``
+* ``timestep``, ``cancel_damping``, ``small_rotations``, ``gyroscopic``, ``planar``,
+  ``ccd``, ``chamfer_shape``
   (:class:`JoltSettings`).
 
 See :doc:`the engine's page </engines/jolt>` in the documentation for its calibration,
@@ -74,7 +85,7 @@ from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.friction import product_frictions
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.geometry import Block, Support
+from rockbench.geometry import Block, Cylinder, Support
 from rockbench.geometry.polygon import area_centroid
 from rockbench.scenarios import Scenario
 
@@ -90,6 +101,49 @@ _SKIP2 = 1e-12
 
 #: culverin's allowed-DOF bits for the x–z plane: translations x and z, rotation about y.
 _DOF_XZ = 1 | 4 | 16
+
+
+#: cos 45° = sin 45°: the half-angle terms of a quarter turn.
+_HALF = math.sqrt(0.5)
+
+
+def _times_x90(q: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    """q · (a quarter turn about x), quaternions in culverin's order (x, y, z, w): the frame
+    of a Jolt cylinder (axis along its y) whose axis is the z of the frame ``q``."""
+    x, y, z, w = q
+    return (_HALF * (w + x), _HALF * (y + z), _HALF * (z - y), _HALF * (w - x))
+
+
+def _gyroscopic(q: list[float], w: tuple[float, float, float],
+                inertia: tuple[float, float, float], dt: float) -> tuple[float, float, float]:
+    """The angular velocity ``w`` (world axes) after the gyroscopic torque −ω × Iω of a step.
+
+    Jolt's own ``ApplyGyroscopicForce``, in double precision: the angular momentum in the
+    body's principal frame (``q``: x, y, z, w; ``inertia``: the principal moments) takes an
+    explicit Euler step and is rescaled to its former magnitude, which keeps the step from
+    adding energy.
+    """
+    qx, qy, qz, qw = q
+    # into the body frame: v' = q* v q
+    tx, ty, tz = 2 * (qz * w[1] - qy * w[2]), 2 * (qx * w[2] - qz * w[0]), \
+        2 * (qy * w[0] - qx * w[1])
+    lx = w[0] + qw * tx + (qz * ty - qy * tz)
+    ly = w[1] + qw * ty + (qx * tz - qz * tx)
+    lz = w[2] + qw * tz + (qy * tx - qx * ty)
+    ix, iy, iz = inertia
+    mx, my, mz = ix * lx, iy * ly, iz * lz
+    nx = mx - dt * (ly * mz - lz * my)
+    ny = my - dt * (lz * mx - lx * mz)
+    nz = mz - dt * (lx * my - ly * mx)
+    n2 = nx * nx + ny * ny + nz * nz
+    if n2 == 0.0:
+        return 0.0, 0.0, 0.0
+    f = math.sqrt((mx * mx + my * my + mz * mz) / n2)
+    lx, ly, lz = f * nx / ix, f * ny / iy, f * nz / iz
+    # back to world axes: v = q v' q*
+    tx, ty, tz = 2 * (qy * lz - qz * ly), 2 * (qz * lx - qx * lz), 2 * (qx * ly - qy * lx)
+    return (lx + qw * tx + (qy * tz - qz * ty), ly + qw * ty + (qz * tx - qx * tz),
+            lz + qw * tz + (qx * ty - qy * tx))
 
 
 def _culverin() -> Any:
@@ -126,6 +180,11 @@ class JoltSettings(EngineSettings):
         at 0.1 ms) does not turn, and its pivot slides: a block released near λ starts
         that slowly. With this on, the engine adds the skipped turns up and applies them
         once they exceed 1e-6 rad.
+    gyroscopic : bool
+        Add the gyroscopic torque −ω × Iω (Jolt: left out; culverin does not set Jolt's
+        ``mApplyGyroscopicForce``, so a free body keeps its angular velocity's direction
+        in world axes), in Jolt's own form, before each step, to the boxes and cylinders of
+        a scene with a cylinder or a start out of the x–z plane. Off in the ``game`` preset.
     planar : bool
         Restrict each block to the x–z plane (Jolt's allowed degrees of freedom:
         translations x and z, rotation about y; culverin: all six). A base motion along
@@ -143,6 +202,7 @@ class JoltSettings(EngineSettings):
     timestep: float = 1e-4
     cancel_damping: bool = True
     small_rotations: bool = True
+    gyroscopic: bool = True
     planar: bool = False
     ccd: bool = False
     chamfer_shape: Literal["hull", "narrow_box"] = "hull"
@@ -158,7 +218,8 @@ class JoltEngine(Engine):
     name: ClassVar[str] = "jolt"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
                                                         chamfer=True, assemblies=True,
-                                                        base_axes="xyz")
+                                                        base_axes="xyz", cylinders=True,
+                                                        start3d=True)
     Settings: ClassVar[type[EngineSettings]] = JoltSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         # calibration: docs/engines/jolt.md
@@ -167,7 +228,7 @@ class JoltEngine(Engine):
         # Jolt's and culverin's defaults at culverin's 60 Hz step, the blocks free in 3D
         # (what a game runs); its step is longer than a 1 ms output interval
         "game": {"timestep": 1.0 / 60.0, "cancel_damping": False, "small_rotations": False,
-                 "planar": False,
+                 "gyroscopic": False, "planar": False,
                  "ccd": False},
     }
     requires: ClassVar[tuple[str, ...]] = ("culverin",)
@@ -189,10 +250,16 @@ class JoltEngine(Engine):
         self._ang = np.zeros((0, 4), dtype=np.float32)
         # each block's body origin from the centre of mass Jolt reports, in its frame
         self._offsets = np.zeros((0, 3))
+        # which blocks are cylinders, whose Jolt frame is theirs turned by +90° about x
+        self._turned = np.zeros(0, dtype=bool)
+        self._any_turned = False
         self._boost = 1.0
         self._catch_up = False
         self._extra = False
         self._skipped: list[list[float]] = []
+        # each block's principal moments in its Jolt frame, where the gyroscopic torque is
+        # added (None: left to Jolt)
+        self._gyro: list[tuple[float, float, float] | None] = []
         self._dt = 0.0
         self._poses = np.zeros((0, 7))
         # the base's displacement at each step start and its secant velocity over the step
@@ -223,6 +290,10 @@ class JoltEngine(Engine):
             raise UnsupportedScenario(
                 "jolt: planar=True locks the blocks' motion along y, so a base motion along "
                 "y cannot drag them; run it with planar=false")
+        if s.planar and (scenario.has_cylinders or not scenario.planar_start):
+            raise UnsupportedScenario(
+                "jolt: planar=True holds boxes in the x–z plane: run cylinders and starts "
+                "out of that plane with planar=false")
         if s.planar and any(not isinstance(b, Block) or (b.chamfer > 0.0 and
                                                          s.chamfer_shape == "hull")
                             for b in scenario.blocks):
@@ -243,7 +314,11 @@ class JoltEngine(Engine):
         self._boost = 1.0 / (1.0 - DAMPING * dt) if s.cancel_damping else 1.0
         g = scenario.g * self._boost
         self._catch_up = s.small_rotations
-        self._extra = s.cancel_damping or s.small_rotations
+        # the gyroscopic torque, in a scene that can turn a body off its principal axes:
+        # one with a cylinder or started out of the x–z plane (a block started in it rocks
+        # about a principal axis and is run as it always was)
+        spin = s.gyroscopic and (scenario.has_cylinders or not scenario.planar_start)
+        self._extra = s.cancel_damping or s.small_rotations or spin
 
         n_bodies = scenario.geometry.n_bodies + len(scenario.geometry.supports) + 1
         # one worker thread: bit-identical runs, and no oversubscription of shared cores
@@ -275,16 +350,35 @@ class JoltEngine(Engine):
             self._origins.append(origin)
 
         self._bodies, offsets = [], []
-        for blk, (cx, cz, th), mu in zip(blocks, scenario.initial_poses(), mus[1:],
-                                         strict=True):
+        # a start in the x–z plane at rest is placed from its (x, z, angle) poses, as it
+        # always was (bit-identical planar runs); any other from its 3D states
+        in_plane = scenario.initial_azimuth == 0.0 and not scenario.moving_start
+        states = scenario.initial_states()
+        self._turned = np.array([isinstance(blk, Cylinder) for blk in blocks], dtype=bool)
+        for i, (blk, (cx, cz, th), mu) in enumerate(zip(blocks, scenario.initial_poses(),
+                                                        mus[1:], strict=True)):
             quat = (0.0, math.sin(0.5 * th), 0.0, math.cos(0.5 * th))  # culverin: x, y, z, w
+            pos = (float(cx), 0.0, float(cz))
+            if not in_plane:
+                pos = (float(states[i, 0]), float(states[i, 1]), float(states[i, 2]))
+                qw, qx, qy, qz = (float(v) for v in states[i, 3:7])
+                quat = (qx, qy, qz, qw)
+            if isinstance(blk, Cylinder):
+                # Jolt's cylinder has its axis along its local y: the Jolt body's frame is
+                # the cylinder's turned by +90° about x (its y onto the cylinder's z)
+                quat = _times_x90(quat)
             kw = dict(rot=quat, mass=float(blk.m), friction=mu, restitution=e, ccd=s.ccd)
             hy = 0.5 * blk.depth
-            if isinstance(blk, Block) and (blk.chamfer == 0.0 or s.chamfer_shape == "narrow_box"):
+            if isinstance(blk, Cylinder):
+                # (half height, radius); with the mass given Jolt scales the cylinder's
+                # exact inertia to it: (I1, I3, I1) about its x, y, z
+                handle = world.create_body(pos=pos, size=(float(blk.h), float(blk.radius)),
+                                           shape=c.SHAPE_CYLINDER, **kw)
+                offsets.append((0.0, 0.0, 0.0))
+            elif isinstance(blk, Block) and (blk.chamfer == 0.0 or s.chamfer_shape == "narrow_box"):
                 # a box (a chamfered block: the box spanning its flat faces, its pivots)
                 hx = blk.pivot_half_width if blk.chamfer > 0.0 else blk.b
-                handle = world.create_body(pos=(float(cx), 0.0, float(cz)),
-                                           size=(hx, hy, blk.h), shape=c.SHAPE_BOX,
+                handle = world.create_body(pos=pos, size=(hx, hy, blk.h), shape=c.SHAPE_BOX,
                                            allowed_dofs=_DOF_XZ if s.planar else 0, **kw)
                 offsets.append((0.0, 0.0, 0.0))
             else:
@@ -293,8 +387,7 @@ class JoltEngine(Engine):
                 # centroid, which a prism may place off its own centre of gravity
                 o = np.asarray(area_centroid(profile)[1], float)
                 handle = world.create_convex_hull(
-                    pos=(float(cx), 0.0, float(cz)), points=self._prism_points(profile, hy),
-                    **kw)
+                    pos=pos, points=self._prism_points(profile, hy), **kw)
                 offsets.append((-o[0], 0.0, -o[1]))
             self._bodies.append(handle)
         # bodies exist in Jolt only after a step: commit the scene without moving it
@@ -303,6 +396,16 @@ class JoltEngine(Engine):
             world.activate(handle)
         self._world = world
         self._offsets = np.array(offsets, float).reshape(-1, 3)
+        self._any_turned = bool(self._turned.any())
+        # the principal moments in each Jolt body's frame (a cylinder's axis: its y); hulls
+        # (their inertia turned off the body's axes by Jolt) are left to Jolt
+        self._gyro = [None if not spin or off.any() else
+                      ((i[0], i[2], i[1]) if turned else (i[0], i[1], i[2]))
+                      for off, turned, i in zip(self._offsets, self._turned.tolist(),
+                                                (tuple(float(v) for v in b.inertia)
+                                                 for b in blocks), strict=True)]
+        if scenario.moving_start:
+            self._set_velocities(states)
         self._skipped = [[0.0, 0.0, 0.0] for _ in self._bodies]
         # the shadow buffers (no body is created after this: a live view blocks resizing)
         self._rows = np.array([world.get_index(h) for h in self._bodies], dtype=np.intp)
@@ -319,6 +422,24 @@ class JoltEngine(Engine):
             self._v = [tuple(p) for p in (np.diff(u, axis=0) / dt).tolist()]
             self._u_end = tuple(drive.final_displacement().tolist())
         return dt
+
+    def _set_velocities(self, states: np.ndarray) -> None:
+        """Give each block the velocities of its start (:meth:`Scenario.initial_states`).
+
+        The states' velocity is that of the block's centre of gravity (the body's origin)
+        and its angular velocity is in world axes, as Jolt's; Jolt's linear velocity is that
+        of the body's centre of mass (a hull's may lie off the origin, by −offset).
+        """
+        world = self._world
+        for handle, state, o in zip(self._bodies, states, self._offsets, strict=True):
+            v, w = np.array(state[7:10], float), np.array(state[10:13], float)
+            if o.any():
+                # the centre of mass lies at −o from the origin in the block's frame
+                qw, qv = float(state[3]), np.array(state[4:7], float)
+                t = 2.0 * np.cross(qv, -o)
+                v += np.cross(w, -o + qw * t + np.cross(qv, t))
+            world.set_linear_velocity(handle, *(float(a) for a in v))
+            world.set_angular_velocity(handle, *(float(a) for a in w))
 
     @staticmethod
     def _prism_points(profile: np.ndarray, half_depth: float) -> np.ndarray:
@@ -399,12 +520,18 @@ class JoltEngine(Engine):
         k, dt = self._boost, self._dt
         lin, ang, rot = self._lin, self._ang, self._rot
         world = self._world
+        gyro = self._gyro
         for j, (handle, r) in enumerate(zip(self._bodies, self._rows.tolist(), strict=True)):
             wx, wy, wz, _ = ang[r].tolist()
+            inertia = gyro[j]
+            if inertia is not None:
+                wx, wy, wz = _gyroscopic(rot[r].tolist(), (wx, wy, wz), inertia, dt)
+                world.set_angular_velocity(handle, k * wx, k * wy, k * wz)
             if k != 1.0:
                 vx, vy, vz, _ = lin[r].tolist()
                 world.set_linear_velocity(handle, k * vx, k * vy, k * vz)
-                world.set_angular_velocity(handle, k * wx, k * wy, k * wz)
+                if inertia is None:
+                    world.set_angular_velocity(handle, k * wx, k * wy, k * wz)
             if not self._catch_up:
                 continue
             acc = self._skipped[j]
@@ -446,6 +573,11 @@ class JoltEngine(Engine):
         q = self._rot[self._rows].astype(float)  # x, y, z, w
         out[:, 3] = q[:, 3]
         out[:, 4:] = q[:, :3]
+        if self._any_turned:
+            # a cylinder's frame from its Jolt body's: q · (a quarter turn about −x)
+            t = self._turned
+            w, x, y, z = q[t, 3], q[t, 0], q[t, 1], q[t, 2]
+            out[t, 3:] = _HALF * np.column_stack([w + x, x - w, y - z, y + z])
         p = self._pos[self._rows, :3]
         if self._offsets.any():
             # the body origin (the block's centre of gravity) from the centre of mass
