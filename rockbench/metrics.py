@@ -11,8 +11,8 @@ import numpy as np
 
 from rockbench.trajectory import Trajectory
 
-__all__ = ["peak_ratio", "zero_crossings", "impact_times", "max_error", "impact_time_errors",
-           "time_to_rest", "peak_relative_error"]
+__all__ = ["peak_ratio", "zero_crossings", "first_zero", "impact_times", "max_error",
+           "impact_time_errors", "time_to_rest", "peak_relative_error"]
 
 
 def peak_ratio(traj: Trajectory, lam: float) -> np.ndarray:
@@ -39,6 +39,12 @@ def zero_crossings(t: np.ndarray, theta: np.ndarray,
                 last = int(i) + 1
         idx = np.asarray(keep, dtype=int)
     return t[idx] - theta[idx] * (t[idx + 1] - t[idx]) / (theta[idx + 1] - theta[idx])
+
+
+def first_zero(t: np.ndarray, theta: np.ndarray) -> float:
+    """The first time ``theta`` changes sign (:func:`zero_crossings`), or NaN if it never does."""
+    z = zero_crossings(t, theta)
+    return float(z[0]) if z.size else float("nan")
 
 
 def impact_times(traj: Trajectory, block: int = 0) -> np.ndarray:

@@ -34,7 +34,7 @@ def test_readme_names_only_existing_suites_and_commands():
     code = "\n".join(re.findall(r"```bash\n(.*?)```", text, flags=re.S))
     for suite in re.findall(r"--suite ([a-z0-9-]+)", code):
         assert suite in suites() or suite == "paper-sensitivity", suite
-    for cmd in re.findall(r"^(?:\S*/)?rockbench ([a-z]+)", code, flags=re.M):
+    for cmd in re.findall(r"^(?:\S*/)?rockbench ([a-z0-9-]+)", code, flags=re.M):
         assert cmd in commands(), cmd
 
 

@@ -122,7 +122,7 @@ def rolling_reference(scenario: Scenario) -> Trajectory:
     w1, w2, w3 = float(w @ a1), float(w @ a2), float(w @ e3)
     motion = scenario.motion
     planar = scenario.planar_start and "y" not in motion.axes
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     sol = solve_rolling(
         body, theta, psi, w1, w2 / math.sin(theta), w3 - w2 / math.tan(theta),
         scenario.duration, phi0=-psi, contact0=(float(contact[0]), float(contact[1])),
@@ -143,5 +143,6 @@ def rolling_reference(scenario: Scenario) -> Trajectory:
     return Trajectory(t=sol.t, theta=o.theta, x=poses[..., 0], z=poses[..., 2], wobble=o.wobble,
                       y=poses[..., 1], roll=o.roll, twist=o.twist, status=status,
                       message=message, wall_time=time.perf_counter() - start,
+                      cpu_time=time.process_time() - cpu,
                       engine="analytic", scenario=scenario.name,
                       settings={"model": "rolling cylinder"})

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from rockbench import analytic
+from rockbench.analytic import cases_3d
 from rockbench.engines.base import Engine
 from rockbench.geometry import (
     Block,
@@ -44,7 +45,7 @@ from rockbench.geometry import (
     voussoir_arch,
 )
 from rockbench.geometry.polygon import penetration, rotate
-from rockbench.metrics import impact_times, max_error
+from rockbench.metrics import first_zero, impact_times, max_error
 from rockbench.scenarios import Scenario, SinePulse, scenario_to_dict
 from rockbench.scenarios.catalog import SINGLE2, STACK2
 from rockbench.trajectory import Status, Trajectory
@@ -343,6 +344,49 @@ def check_assembly_determinism(engine: Engine, settings: Any = None,
         a.x, b.x), "two identical runs of an assembly differ"
 
 
+def check_cylinder_rocking(engine: Engine, settings: Any = None,
+                           tol: Tolerances = Tolerances()) -> None:
+    """A drum released in the x–z plane rocks on its rim as Housner's block of half-width R
+    with the cylinder's inertia: its first impact on time. Where the engine also takes 3D
+    starts, the drum released toward 40° tilts alike (a box in its place would pivot on a
+    corner, with another lever and inertia)."""
+    sc = cases_3d.drum_release()
+    ref = analytic.reference(sc)
+    t_ref = float(impact_times(ref)[0])
+    traj = _run(engine, sc, settings)
+    t_eng = first_zero(traj.t, traj.theta[:, 0])
+    assert abs(t_eng / t_ref - 1.0) <= tol.impact_time, (
+        f"the drum's first impact at {t_eng:.4f} s, Housner's with the cylinder's inertia at "
+        f"{t_ref:.4f} s (limit {tol.impact_time * 100:g} %)")
+    if not engine.capabilities.start3d:
+        return
+    turned = _run(engine, sc.replace(initial_azimuth=math.radians(40.0)), settings)
+    before = ref.t < 0.9 * t_ref
+    n = int(np.count_nonzero(before))
+    err = float(np.max(np.abs(turned.tilt[:n, 0] - ref.theta[:n, 0]))) / _lam(sc)
+    assert err <= tol.free_error, (
+        f"released toward 40° the drum's tilt leaves Housner's by {err:.4f} λ before its "
+        f"impact (limit {tol.free_error} λ): not rocking on a round rim")
+
+
+def check_corner_rocking(engine: Engine, settings: Any = None,
+                         tol: Tolerances = Tolerances()) -> None:
+    """A square pillar released on its corner along its diagonal rocks in the diagonal plane
+    and lands at Housner's quarter period with the diagonal's lever and inertia."""
+    sc = cases_3d.corner_release()
+    traj = _run(engine, sc, settings)
+    t_land = cases_3d.corner_landing_time(cases_3d.PILLAR, sc.theta0, sc.g)
+    t_eng = first_zero(traj.t, traj.theta[:, 0])
+    assert abs(t_eng / t_land - 1.0) <= tol.impact_time, (
+        f"the pillar lands at {t_eng:.4f} s, the closed form at {t_land:.4f} s (limit "
+        f"{tol.impact_time * 100:g} %)")
+    before = traj.t < 0.95 * t_land
+    off = float(np.max(np.abs(traj.theta[before, 0] + traj.roll[before, 0]))) / sc.tilt_lambda()
+    assert off <= tol.mirror, (
+        f"the pillar leaves its diagonal plane by {off:.2e} λ before it lands (limit "
+        f"{tol.mirror} λ)")
+
+
 Check = Callable[..., None]
 
 #: Every check of the kit, by name (what ``known_failures`` refers to).
@@ -352,7 +396,7 @@ CHECKS: dict[str, Check] = {
               check_overturning, check_scenario_not_mutated, check_free_rocking,
               check_forced_peak, check_stack_rest, check_assembly_rest,
               check_assembly_penetration, check_assembly_mirror_symmetry,
-              check_assembly_determinism)
+              check_assembly_determinism, check_cylinder_rocking, check_corner_rocking)
 }
 
 
@@ -381,6 +425,10 @@ def conformance_checks(engine: Engine | type[Engine]) -> list[tuple[str, Check]]
     if cap.assemblies:
         names += ["assembly_rest", "assembly_penetration", "assembly_mirror_symmetry",
                   "assembly_determinism"]
+    if cap.cylinders and not cap.analytic:
+        names.append("cylinder_rocking")
+    if cap.start3d and not cap.analytic:
+        names.append("corner_rocking")
     return [(n, CHECKS[n]) for n in names]
 
 

@@ -1,95 +1,53 @@
 """The engines against the 3D references: a drum in the plane, a corner release, a precession.
 
-Three scenes with an answer known in closed form, each of which a planar case
-cannot reveal:
+The three scenes of :mod:`rockbench.analytic.cases_3d`, each with an answer
+known in closed form that a planar case cannot reveal: a drum released in the
+plane (its first impact), a pillar released on its corner (its landing time,
+and it stays on its diagonal), a slender cylinder in steady precession (its
+tilt and rate).
 
-- **drum release** (:func:`drum_release`): a stone drum (R 0.15 m, H 1.0 m)
-  released in the x–z plane at 0.5 λ rocks on its rim as Housner's block of
-  half-width R with the cylinder's inertia; its first impact;
-- **corner release** (:func:`corner_release`): a square pillar (0.3 × 0.3 ×
-  1.2 m) released from rest on a corner along its diagonal rocks in the diagonal
-  plane until it lands (:func:`corner_landing_time`), without leaving it;
-- **steady precession** (:func:`precession`): a slender cylinder (R 0.3 m,
-  H 1.5 m) started rolling on its rim at 0.2 rad of tilt in the steady precession
-  of :func:`~rockbench.analytic.steady_precession` holds that tilt and
-  precesses at the closed-form rate Ω.
-
-:func:`measure` runs one method on the three and returns the errors
-(:class:`Errors3D`); ``python -m benchmarks.references_3d`` tabulates them per
-engine and preset, with the time step halved for convergence.
+:func:`run_references_3d` runs them on every method, at its preset's time
+step and at half of it, and measures the errors (:class:`Errors3D`);
+``rockbench references-3d`` writes the report
+(:mod:`rockbench.report.references_3d_report`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from rockbench.analytic import (
-    SteadyPrecession,
-    quarter_period,
-    reference,
-    rolling_start,
-    steady_precession,
+from rockbench.analytic import reference
+from rockbench.analytic.cases_3d import (
+    DRUM,
+    PILLAR,
+    PRECESSION_TILT,
+    SLENDER_CYLINDER,
+    corner_landing_time,
+    corner_release,
+    drum_release,
+    precession,
 )
-from rockbench.engines import get_engine
-from rockbench.geometry import Block, Cylinder, rocking_about, single
+from rockbench.campaign import CampaignOptions, PlannedRun, run_campaign
+from rockbench.engines import engine_class
+from rockbench.errors import RockbenchError
+from rockbench.geometry import Cylinder
 from rockbench.method import Method
-from rockbench.scenarios import Scenario
+from rockbench.metrics import first_zero
+from rockbench.runner import ExecutionOptions
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["DRUM", "SLENDER_CYLINDER", "PILLAR", "drum_release", "corner_release",
-           "precession", "corner_landing_time", "first_zero", "Errors3D", "measure"]
-
-#: A stone drum, a slender cylinder and a square pillar.
-DRUM = Cylinder(0.15, 1.0, density=2500.0)
-SLENDER_CYLINDER = Cylinder(0.3, 1.5, density=2000.0)
-PILLAR = Block(0.3, 0.3, 1.2, density=2000.0)
-#: Tilt (rad) of the steady precession.
-PRECESSION_TILT = 0.2
-
-
-def drum_release(duration: float = 0.8) -> Scenario:
-    """The drum released from rest in the x–z plane at 0.5 λ."""
-    return Scenario("drum-free", single(DRUM), initial_tilt=0.5, duration=duration)
-
-
-def corner_release(duration: float = 0.8) -> Scenario:
-    """The pillar released from rest on its corner at 0.5 λ of its diagonal (azimuth 45°)."""
-    return Scenario("corner-free", single(PILLAR), initial_tilt=0.5, initial_azimuth=0.25 * math.pi,
-                    duration=duration)
-
-
-def precession(duration: float = 5.0) -> tuple[Scenario, SteadyPrecession]:
-    """The slender cylinder in steady precession at 0.2 rad of tilt, on a contact circle of
-    its own radius (its centre of mass circles the origin), sampled at 200 Hz."""
-    c = SLENDER_CYLINDER
-    sp = steady_precession(c, PRECESSION_TILT, contact_radius=c.radius)
-    start = rolling_start(c, sp.theta, 0.0, 0.0, sp.psi_dot, sp.phi_dot)
-    return Scenario("cylinder-precession", single(c), **start._asdict(), duration=duration,
-                    output_rate=200.0), sp
-
-
-def corner_landing_time(block: Block, tilt: float, g: float = 9.81) -> float:
-    """Time for a square-based block released from rest on a corner, tilted by ``tilt`` (rad)
-    along its diagonal, to land: Housner's quarter period in the diagonal plane, with the
-    half-diagonal as lever and the inertia about the horizontal axis across the diagonal
-    (every horizontal axis of a square base has the same)."""
-    lever = math.hypot(block.b, 0.5 * block.depth)
-    rock = rocking_about(block.m, lever, block.h, block.inertia[0], g)
-    return float(quarter_period(rock.p, rock.lam, tilt))
-
-
-def first_zero(t: np.ndarray, theta: np.ndarray) -> float:
-    """The first time θ changes sign (linear interpolation), or NaN."""
-    s = np.sign(theta)
-    i = np.nonzero(s[:-1] * s[1:] < 0)[0]
-    if not i.size:
-        return math.nan
-    j = int(i[0])
-    return float(t[j] - theta[j] * (t[j + 1] - t[j]) / (theta[j + 1] - theta[j]))
-
+__all__ = ["DRUM", "SLENDER_CYLINDER", "PILLAR", "PRECESSION_TILT", "drum_release",
+           "corner_release", "precession", "corner_landing_time", "first_zero", "Errors3D",
+           "errors",
+           "rim_contact", "References3DOptions", "References3DResult", "run_references_3d",
+           "KIND", "TIMING_TOLERANCE", "DRIFT_TOLERANCE", "BOUNDS"]
 
 @dataclass(frozen=True)
 class Errors3D:
@@ -99,6 +57,10 @@ class Errors3D:
     ----------
     method : Method
         The engine and its settings.
+    label : str
+        The method's label in the study (a halved step keeps its preset's).
+    rung : int
+        0 at the preset's time step, 1 at half of it.
     drum_impact : float
         Relative error of the drum's first impact time.
     corner_landing : float
@@ -113,9 +75,13 @@ class Errors3D:
         CPU seconds per simulated second of the precession.
     failures : tuple of str
         The runs whose status was not ``ok``, with the engine's message.
+    precession : Trajectory or None
+        The precession run (for the figures).
     """
 
     method: Method
+    label: str
+    rung: int
     drum_impact: float
     corner_landing: float
     off_diagonal: float
@@ -123,41 +89,196 @@ class Errors3D:
     rate_error: float
     cpu_per_s: float
     failures: tuple[str, ...]
+    precession: Trajectory | None = None
+
+    def converged(self, finer: Errors3D) -> bool | None:
+        """Whether the half-step rung ``finer`` gives the same answers (None: unknown).
+
+        The same within :data:`TIMING_TOLERANCE` on the two landing times, and within
+        the larger of half the drift and :data:`DRIFT_TOLERANCE` on the precession's tilt.
+        """
+        pairs = ((self.drum_impact, finer.drum_impact, TIMING_TOLERANCE),
+                 (self.corner_landing, finer.corner_landing, TIMING_TOLERANCE),
+                 (self.tilt_drift, finer.tilt_drift,
+                  max(DRIFT_TOLERANCE, 0.5 * finer.tilt_drift)))
+        if any(not (math.isfinite(a) and math.isfinite(b)) for a, b, _ in pairs):
+            return None
+        return all(abs(a - b) <= tol for a, b, tol in pairs)
 
 
-def measure(method: Method, precession_duration: float = 5.0) -> Errors3D:
-    """Run ``method`` on the three scenes and measure its errors."""
-    engine = get_engine(method.engine)
-    settings = method.settings
-    failures: list[str] = []
+    def within_bounds(self) -> bool | None:
+        """Whether every error is within :data:`BOUNDS` (None: a run failed)."""
+        values = (abs(self.drum_impact), abs(self.corner_landing), self.off_diagonal,
+                  self.tilt_drift, abs(self.rate_error))
+        if not all(math.isfinite(v) for v in values):
+            return None
+        return all(v <= b for v, b in zip(values, BOUNDS, strict=True))
 
-    def run(sc: Scenario) -> Trajectory | None:
-        tr = engine.simulate(sc, settings)
-        if tr.status is Status.OK:
-            return tr
-        failures.append(f"{sc.name}: {tr.status} ({tr.message})")
-        return None
 
+#: The bounds of :meth:`Errors3D.within_bounds`: 1 % on the two landing times, 1e-3 rad
+#: off the diagonal, 0.01 rad (5 % of the tilt) of tilt drift and 1 % on the precession
+#: rate.
+BOUNDS = (0.01, 0.01, 1e-3, 0.01, 0.01)
+#: Largest change of a landing time's relative error at half the step that counts as
+#: converged.
+TIMING_TOLERANCE = 1e-3
+#: Floor of the change of the precession's tilt drift (rad) that counts as converged.
+DRIFT_TOLERANCE = 2e-4
+
+
+def errors(method: Method, label: str, rung: int, drum: Trajectory | None,
+           corner: Trajectory | None, spinning: Trajectory | None,
+           failures: tuple[str, ...] = ()) -> Errors3D:
+    """The errors of one method's three runs (None: a run that failed)."""
     nan = math.nan
-    drum = drum_release()
-    ref = reference(drum)
-    t_ref = first_zero(ref.t, ref.theta[:, 0])
-    tr = run(drum)
-    drum_err = nan if tr is None else first_zero(tr.t, tr.theta[:, 0]) / t_ref - 1.0
-    corner = corner_release()
-    t_land = corner_landing_time(PILLAR, corner.theta0, corner.g)
-    tr = run(corner)
+    d_ref = drum_release()
+    ref = reference(d_ref)
+    drum_err = (nan if drum is None else
+                first_zero(drum.t, drum.theta[:, 0]) / first_zero(ref.t, ref.theta[:, 0]) - 1)
+    c_ref = corner_release()
+    t_land = corner_landing_time(PILLAR, c_ref.theta0, c_ref.g)
     land_err = off = nan
-    if tr is not None:
-        land_err = first_zero(tr.t, tr.theta[:, 0]) / t_land - 1.0
-        before = tr.t < 0.95 * t_land
-        off = float(np.max(np.abs(tr.theta[before, 0] + tr.roll[before, 0])))
-    sc, sp = precession(precession_duration)
-    tr = run(sc)
+    if corner is not None:
+        land_err = first_zero(corner.t, corner.theta[:, 0]) / t_land - 1.0
+        before = corner.t < 0.95 * t_land
+        off = float(np.max(np.abs(corner.theta[before, 0] + corner.roll[before, 0])))
     drift = rate = cost = nan
-    if tr is not None:
-        drift = float(np.max(np.abs(tr.tilt[:, 0] - sp.theta)))
-        az = np.unwrap(tr.azimuth[:, 0])
-        rate = float((az[-1] - az[0]) / (tr.t[-1] - tr.t[0]) / sp.psi_dot - 1.0)
-        cost = tr.cpu_time / sc.duration
-    return Errors3D(method, drum_err, land_err, off, drift, rate, cost, tuple(failures))
+    if spinning is not None:
+        _, sp = precession()
+        drift = float(np.max(np.abs(spinning.tilt[:, 0] - sp.theta)))
+        az = np.unwrap(spinning.azimuth[:, 0])
+        rate = float((az[-1] - az[0]) / (spinning.t[-1] - spinning.t[0]) / sp.psi_dot - 1.0)
+        cost = spinning.cpu_time / float(spinning.t[-1])
+    return Errors3D(method, label, rung, drum_err, land_err, off, drift, rate, cost, failures,
+                    spinning)
+
+
+def rim_contact(traj: Trajectory, cylinder: Cylinder) -> np.ndarray:
+    """The path of a cylinder's lowest rim point (x, y), shape (n, 2), from its trajectory.
+
+    The point of the bottom rim on the lean side: G − h e₃ + R (cos θ u − sin θ ẑ), with θ
+    the tilt, u the lean's horizontal direction and e₃ = cos θ ẑ + sin θ u the axis.
+    """
+    tilt, az = traj.tilt[:, 0], traj.azimuth[:, 0]
+    # horizontal part of −h e₃ + R (cos θ u − sin θ ẑ), along u
+    lever = -cylinder.h * np.sin(tilt) + cylinder.radius * np.cos(tilt)
+    return np.column_stack([traj.x[:, 0] + lever * np.cos(az),
+                            traj.y[:, 0] + lever * np.sin(az)])
+
+
+@dataclass(frozen=True)
+class References3DOptions:
+    """What ``rockbench references-3d`` runs.
+
+    Attributes
+    ----------
+    engines : sequence of str
+        The engines (the analytic reference is always run).
+    presets : sequence of str
+        Each engine's presets (an engine's ``preset`` override picks one).
+    overrides : mapping
+        Engine → knob overrides.
+    converge : bool
+        Run each method again at half its time step.
+    duration : float
+        Simulated time of the precession (s).
+    execution : ExecutionOptions
+        Workers, time limits.
+    resume : bool
+        Reuse runs (and their trajectories) from the store.
+    db : Path or None
+        The results store.
+    command : str
+        The command line, for the report.
+    """
+
+    engines: Sequence[str]
+    presets: Sequence[str] = ("accurate", "fast")
+    overrides: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    converge: bool = True
+    duration: float = 5.0
+    execution: ExecutionOptions = field(default_factory=ExecutionOptions)
+    resume: bool = False
+    db: Path | None = None
+    command: str = ""
+
+
+@dataclass(frozen=True)
+class References3DResult:
+    """The study's rows (each method, rung 0 then its half step) and the reference.
+
+    Attributes
+    ----------
+    options : References3DOptions
+        What was run.
+    rows : tuple of Errors3D
+        One per method and rung, the reference first.
+    versions : dict
+        Engine → library version.
+    ran, reused : int
+        Runs executed now and taken from the store.
+    wall_time : float
+        Seconds.
+    """
+
+    options: References3DOptions
+    rows: tuple[Errors3D, ...]
+    versions: dict[str, str]
+    ran: int
+    reused: int
+    wall_time: float
+
+    def finer(self, row: Errors3D) -> Errors3D | None:
+        """The half-step rung of a rung-0 row, if it ran."""
+        return next((r for r in self.rows if r.label == row.label and r.rung == 1), None)
+
+
+#: The store's ``kind`` of runs made by this study.
+KIND = "references-3d"
+
+
+def run_references_3d(opts: References3DOptions,
+                      progress: Callable[[int, str], Any] | None = None) -> References3DResult:
+    """Run (or resume) the three scenes on the reference and every method.
+
+    Raises
+    ------
+    RockbenchError
+        No preset, a duration that is not positive, an unknown engine or bad settings.
+    """
+    start = time.perf_counter()
+    if not opts.presets:
+        raise RockbenchError("no preset to run")
+    if not (math.isfinite(opts.duration) and opts.duration > 0):
+        raise RockbenchError(f"duration must be > 0 s, got {opts.duration!r}")
+    scenes = (drum_release(), corner_release(), precession(opts.duration)[0])
+    planned: list[tuple[Method, str, int]] = [(Method.reference(), Method.reference().label,
+                                              0)]
+    for e in dict.fromkeys(e for e in opts.engines if not Method(e).is_reference):
+        over = dict(opts.overrides.get(e, {}))
+        presets = [over.pop("preset")] if "preset" in over else list(opts.presets)
+        for p in presets:
+            m = Method.of(e, {"preset": p, **over}, qualified=True)
+            planned.append((m, m.label, 0))
+            if opts.converge:
+                finer = engine_class(e).refined(m.settings, 1)
+                planned.append((Method.of(e, finer, variation=f"{p}, half step"), m.label, 1))
+    runs = [PlannedRun(sc, m) for m, _, _ in planned for sc in scenes]
+    campaign = run_campaign(runs, CampaignOptions(
+        kind=KIND, suite=KIND, db=opts.db, resume=opts.resume, archive=opts.db is not None,
+        keep=True, execution=opts.execution, references=False), progress=progress)
+    rows = []
+    for k, (m, label, rung) in enumerate(planned):
+        got: list[Trajectory | None] = []
+        failures: list[str] = []
+        for run, res in zip(runs[3 * k:3 * k + 3], campaign.results[3 * k:3 * k + 3],
+                            strict=True):
+            traj = campaign.trajectories.get(run.key)
+            ok = res.metrics.status is Status.OK and traj is not None
+            got.append(traj if ok else None)
+            if not ok:
+                failures.append(f"{run.scenario.name}: {res.metrics.status} "
+                                f"({res.metrics.message})")
+        rows.append(errors(m, label, rung, got[0], got[1], got[2], tuple(failures)))
+    return References3DResult(opts, tuple(rows), campaign.versions, campaign.ran,
+                              campaign.reused, time.perf_counter() - start)
