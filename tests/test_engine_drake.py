@@ -19,11 +19,14 @@ from engine_helpers import (  # noqa: E402
     check_b2_free_rocking_accurate,
     check_base_drives_y_and_z,
     check_base_follows_excitation,
+    check_corner_release,
+    check_cylinder_rocks_like_housner,
     check_paper_stack_under_pulse_runs,
     check_rides_a_base_along_y,
     check_rocks_about_x_like_housner,
     check_sine_pulse_peak,
     check_stack_follows_two_block,
+    check_steady_precession,
     check_tilting_table,
     inclined_scene,
     lam,
@@ -39,6 +42,7 @@ from rockbench.engines.drake_engine import (  # noqa: E402
     harmonic_frictions,
     prism_obj,
 )
+from rockbench.geometry import Cylinder  # noqa: E402
 from rockbench.scenarios import Contact, Scenario, SinePulse, get_scenario  # noqa: E402
 from rockbench.scenarios.excitation import Components  # noqa: E402
 from rockbench.trajectory import Status  # noqa: E402
@@ -474,3 +478,66 @@ def test_a_deep_block_on_a_narrow_one_stays_on_it_off_the_x_axis() -> None:
     assert np.max(np.abs(a.theta)) > 0.05 * lam(sc)  # it rocks
     assert np.max(np.abs(b.theta - a.theta)) < 1e-3 * lam(sc)
     assert np.max(np.abs(b.z - a.z)) < 1e-5
+
+
+# ---------------------------------------------------------------- cylinders and 3D starts
+# Measured (docs/engines/drake.md, "Cylinders and 3D starts"): the drum's first impact
+# −0.015 % (accurate) / −0.077 % (fast), roll and twist exactly 0; the corner landing
+# −0.0008 % / −0.059 %, |θ + roll| ≤ 1.1e-16 / 4.5e-17 rad; the 5 s precession's tilt
+# within 3.0e-5 / 1.5e-4 rad of 0.2, its rate +0.0085 % / +0.0011 %.
+@pytest.mark.parametrize(("preset", "rel", "plane_tol"),
+                         [("accurate", 3e-4, 1e-12), ("fast", 1.5e-3, 1e-12)])
+def test_cylinder_rocks_like_housner(preset: str, rel: float, plane_tol: float) -> None:
+    check_cylinder_rocks_like_housner(DrakeEngine(), preset, rel=rel, plane_tol=plane_tol)
+
+
+@pytest.mark.parametrize(("preset", "rel", "diagonal_tol"),
+                         [("accurate", 1.5e-5, 1e-12), ("fast", 1e-3, 1e-12)])
+def test_corner_release(preset: str, rel: float, diagonal_tol: float) -> None:
+    check_corner_release(DrakeEngine(), preset, rel=rel, diagonal_tol=diagonal_tol)
+
+
+@pytest.mark.parametrize(("preset", "tilt_tol", "rate_rtol"),
+                         [("accurate", 5e-5, 1.5e-4), ("fast", 2.5e-4, 2.5e-5)])
+def test_steady_precession(preset: str, tilt_tol: float, rate_rtol: float) -> None:
+    check_steady_precession(DrakeEngine(), preset, tilt_tol=tilt_tol, rate_rtol=rate_rtol,
+                            duration=5.0)
+
+
+class _Inertia(_Geometry):
+    """Also reads the first body's mass and rotational inertia back from the plant."""
+
+    def _build(self, scenario, settings):
+        dt = super()._build(scenario, settings)
+        body = self._plant.GetBodyByName("block0")
+        si = body.CalcSpatialInertiaInBodyFrame(self._pc)
+        self.mass = si.get_mass()
+        self.com = np.asarray(si.get_com())
+        self.inertia = si.CalcRotationalInertia().CopyToFullMatrix3()
+        return dt
+
+
+def test_a_cylinder_is_built_as_a_cylinder() -> None:
+    from pydrake.geometry import Cylinder as DrakeCylinder
+
+    drum = Cylinder(0.15, 1.0, density=2500.0)
+    sc = Scenario("drum-rest", drum, duration=0.5)
+    DrakeEngine().check_supported(sc)  # raises UnsupportedScenario if not
+    for preset in ("accurate", "fast"):
+        eng = _Inertia()
+        tr = eng.simulate(sc, preset)
+        assert tr.status is Status.OK
+        # Drake's own cylinder, its axis along the body's z, alone (no slices, no spheres)
+        ((shape, pos),) = eng.shapes[0]
+        assert isinstance(shape, DrakeCylinder)
+        assert (shape.radius(), shape.length()) == (drum.radius, drum.height)
+        np.testing.assert_array_equal(pos, np.zeros(3))
+        # the cylinder's mass and inertia, not those of a default density
+        assert eng.mass == pytest.approx(drum.m, rel=1e-12)
+        np.testing.assert_allclose(eng.com, 0.0, atol=1e-15)
+        np.testing.assert_allclose(eng.inertia, drum.inertia_tensor, rtol=1e-12, atol=1e-12)
+        # standing on its base it stays at rest, its centre H/2 above the ground
+        # (measured: 4.0e-8 / 7.8e-8 m of contact penetration, x, y and tilt exactly 0)
+        assert np.max(np.abs(tr.z[:, 0] - drum.h)) < 2e-7
+        assert np.max(np.abs(tr.x)) < 1e-9 and np.max(np.abs(tr.y)) < 1e-9
+        assert np.max(tr.tilt) < 1e-9

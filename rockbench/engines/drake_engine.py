@@ -16,8 +16,14 @@ and velocities are overwritten before every step with u(t) and v(t + φ dt)
 (φ = ``base_velocity_phase``), held still once the motion ends, so that steps are
 batched in C++. The base motion is applied along x, y and z; off the x axis every block
 also has corner spheres at its y faces, on which it rocks about x. Fixed supports are
-shapes of the ground's body with corners of their own. Friction is Coulomb's (static =
-dynamic), combined harmonically per pair (:func:`harmonic_frictions`,
+shapes of the ground's body with corners of their own. A
+:class:`~rockbench.geometry.Cylinder` is Drake's own ``Cylinder`` (axis along the body's
+z), one shape with the cylinder's mass and inertia, on a ``HalfSpace`` ground (a rim on a
+half-space is found in closed form). A start out of the x–z plane or moving is set from
+:meth:`~rockbench.scenarios.Scenario.initial_states` (free-body pose and world-frame
+spatial velocity of the centroid, the body's origin), a block's with the corner spheres
+at its y faces too; a planar start at rest keeps the former code path. Friction is
+Coulomb's (static = dynamic), combined harmonically per pair (:func:`harmonic_frictions`,
 :func:`assembly_harmonic_frictions`); the point-contact
 stiffness comes from ``static_penetration`` (or ``point_stiffness``), the dissipation
 from ``hunt_crossley_dissipation`` (or SAP's ``relaxation_time``). Drake has no
@@ -53,16 +59,20 @@ from rockbench.engines.base import Capabilities, Engine
 from rockbench.engines.drive import AXIS
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.geometry import Block, Support
+from rockbench.geometry import Block, Cylinder, Support
 from rockbench.scenarios import Scenario
 
 __all__ = ["DrakeEngine", "DrakeSettings"]
 
 class _QuietTamsiDeprecation(logging.Filter):
-    """Drop Drake's per-build TAMSI deprecation warning (documented in DrakeSettings)."""
+    """Drop Drake's per-build TAMSI deprecation warning (documented in DrakeSettings) and
+    its note that a half-space (the ground of a scene with cylinders) has no deformable
+    contact (there are no deformable bodies)."""
 
     def filter(self, record: logging.LogRecord) -> bool:
-        return "TAMSI solver is deprecated" not in record.getMessage()
+        msg = record.getMessage()
+        return ("TAMSI solver is deprecated" not in msg
+                and "half spaces are not currently supported for deformable" not in msg)
 
 
 logging.getLogger("drake").addFilter(_QuietTamsiDeprecation())
@@ -310,7 +320,8 @@ class DrakeEngine(Engine):
 
     name: ClassVar[str] = "drake"
     capabilities: ClassVar[Capabilities] = Capabilities(
-        dimensions=3, max_blocks=None, chamfer=True, assemblies=True, base_axes="xyz")
+        dimensions=3, max_blocks=None, chamfer=True, assemblies=True, base_axes="xyz",
+        cylinders=True, start3d=True)
     Settings: ClassVar[type[EngineSettings]] = DrakeSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},
@@ -377,12 +388,16 @@ class DrakeEngine(Engine):
         return p
 
     def _build(self, scenario: Scenario, settings: EngineSettings) -> float:
+        from pydrake.common.eigen_geometry import Quaternion
         from pydrake.geometry import (
             Box,
             CollisionFilterDeclaration,
             GeometrySet,
+            HalfSpace,
         )
+        from pydrake.geometry import Cylinder as DrakeCylinder
         from pydrake.math import RigidTransform, RotationMatrix
+        from pydrake.multibody.math import SpatialVelocity
         from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
         from pydrake.multibody.tree import PrismaticJoint, SpatialInertia, UnitInertia
         from pydrake.systems.analysis import Simulator
@@ -396,7 +411,9 @@ class DrakeEngine(Engine):
         # a base moving along x only keeps the planar benchmark's model, bit for bit: one
         # prismatic joint along x, corner spheres at the slices' centres
         planar = drive.axes == ("x",)
-        ends = drive.moving and not planar
+        # a block tilted toward an azimuth (or set moving out of the x–z plane) pivots on a
+        # corner or rocks about x: corner spheres at its y faces too, as off the x axis
+        ends = (drive.moving and not planar) or not scenario.planar_start
         builder = DiagramBuilder()
         cfg = MultibodyPlantConfig(
             time_step=s.timestep, contact_model=s.contact_model,
@@ -426,6 +443,17 @@ class DrakeEngine(Engine):
         r = s.corner_radius
         for i, blk in enumerate(blocks):
             p_block = p_blocks[mus[i + 1]]
+            if isinstance(blk, Cylinder):
+                # Drake's own cylinder (axis along the body's z), the body's mass and
+                # principal inertia; it rocks and rolls on its rim, one point per pair
+                i1, _, i3 = (float(v) / blk.m for v in blk.inertia)
+                body = plant.AddRigidBody(f"block{i}", SpatialInertia(
+                    blk.m, np.zeros(3), UnitInertia(i1, i1, i3)))  # type: ignore[arg-type]  # pydrake stub mistypes vectors
+                plant.RegisterCollisionGeometry(body, RigidTransform(),
+                                                DrakeCylinder(blk.radius, blk.height),
+                                                f"cylinder{i}", p_block)
+                bodies.append(body)
+                continue
             if isinstance(blk, Block):
                 unit = UnitInertia(*(np.asarray(blk.inertia, float) / blk.m))
             else:  # a prism's x–z product of inertia is not zero: its full tensor
@@ -458,8 +486,11 @@ class DrakeEngine(Engine):
         lz = 2.0 * (0.25 * ext + 0.1)
         if "y" in drive.axes:  # as wide as long: the base travels, the blocks rock along y
             ly = max(ly, lx)
-        ground = Box(lx, ly, lz)
+        ground: Any = Box(lx, ly, lz)
         x_ground = RigidTransform([0.0, 0.0, -0.5 * lz])  # type: ignore[call-overload]  # pydrake stub mistypes vectors
+        if scenario.has_cylinders:
+            # a rim on a half-space is found in closed form (on a box by GJK/EPA)
+            ground, x_ground = HalfSpace(), RigidTransform()
         self._joint = None
         self._joints: list[Any] = []  # the base's prismatic joints, one per moving axis
         self._hold = 0.0
@@ -512,9 +543,17 @@ class DrakeEngine(Engine):
         sim = Simulator(diagram)
         root = sim.get_mutable_context()
         pc = plant.GetMyMutableContextFromRoot(root)
-        for body, (cx, cz, a) in zip(bodies, scenario.initial_poses(), strict=True):
-            plant.SetFreeBodyPose(pc, body, RigidTransform(RotationMatrix.MakeYRotation(a),  # type: ignore[call-overload]  # pydrake stub mistypes vectors
-                                                           [cx, 0.0, cz]))
+        if scenario.planar_start and not scenario.moving_start:
+            for body, (cx, cz, a) in zip(bodies, scenario.initial_poses(), strict=True):
+                plant.SetFreeBodyPose(pc, body, RigidTransform(RotationMatrix.MakeYRotation(a),  # type: ignore[call-overload]  # pydrake stub mistypes vectors
+                                                               [cx, 0.0, cz]))
+        else:
+            # the 3D states: centroid (the body's origin), quaternion (w, x, y, z, as
+            # Drake's), world-frame velocity of the centroid and angular velocity
+            for body, st in zip(bodies, scenario.initial_states(), strict=True):
+                q = Quaternion(*(float(v) for v in st[3:7] / np.linalg.norm(st[3:7])))
+                plant.SetFreeBodyPose(pc, body, RigidTransform(q, st[:3]))
+                plant.SetFreeBodySpatialVelocity(pc, body, SpatialVelocity(st[10:13], st[7:10]))
         if self._hold:
             tau = np.zeros(plant.num_velocities())
             tau[self._joints[-1].velocity_start()] = self._hold
