@@ -27,7 +27,6 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import FancyArrow, Polygon, Rectangle
 from matplotlib.ticker import NullFormatter
@@ -40,6 +39,7 @@ from rockbench.report.document import (
     Section,
     cpu_model,
 )
+from rockbench.report.figures import save_figure
 from rockbench.report.html import write_document
 from rockbench.report.tables import Cell, Table
 from rockbench.scenarios import Scenario
@@ -58,7 +58,6 @@ __all__ = ["AssemblyDrawing", "block_polygons", "draw_assembly", "assembly_figur
 
 CITATION = ("the paper's closing question: physics engines against DEM for multi-block "
             "dry-joint systems, up to collapse")
-_DPI = 110
 _BLOCK = "#d9d4c7"
 _MOVING = "#f0a04b"
 _SUPPORT = "#9a9a9a"
@@ -161,13 +160,6 @@ def _centroid(p: np.ndarray) -> np.ndarray:
     return np.array([((x + x1) * cross).sum(), ((z + z1) * cross).sum()]) / (6.0 * a)
 
 
-def _save(fig: Figure, path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    FigureCanvasAgg(fig)
-    fig.savefig(path, dpi=_DPI)
-    return path
-
-
 def assembly_figure(path: Path, scenario: Scenario) -> tuple[Path, AssemblyDrawing]:
     """``path``: the assembly to scale with its governing limit-analysis mechanism."""
     lim = _governing(scenario)
@@ -180,7 +172,7 @@ def assembly_figure(path: Path, scenario: Scenario) -> tuple[Path, AssemblyDrawi
                      f"{lim.governing_mode})", fontsize=10)
     else:
         ax.set_title(f"{scenario.name}: no mechanism", fontsize=10)
-    return _save(fig, path), drawing
+    return save_figure(fig, path), drawing
 
 
 def collapse_figure(path: Path, study: CollapseStudy, scenario: Scenario) -> Path:
@@ -219,7 +211,7 @@ def collapse_figure(path: Path, study: CollapseStudy, scenario: Scenario) -> Pat
     ax.set_ylim(bottom=0)
     ax.set_title(f"one-sine pulse to collapse: {scenario.name}", fontsize=10)
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def _pct(x: float) -> str:

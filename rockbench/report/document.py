@@ -6,15 +6,18 @@ so both files hold the same tables.
 
 from __future__ import annotations
 
+import datetime as _dt
 import os
 import platform
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from rockbench import provenance
 from rockbench.report.tables import STATUS_MARKS, STATUS_MEANING, Table, render_markdown
 
 __all__ = ["FigureItem", "Bullets", "Section", "Document", "render_document_markdown",
-           "cpu_model", "status_legend"]
+           "cpu_model", "status_legend", "report_date", "run_header"]
 
 
 @dataclass
@@ -91,6 +94,25 @@ def python_version() -> str:
     """``3.11.7 (CPython)`` and the platform."""
     return f"{platform.python_version()} ({platform.python_implementation()}), " \
            f"{platform.system()} {platform.release()}"
+
+
+def report_date() -> str:
+    """Now, as the header's date (local time with its zone)."""
+    return _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M:%S %Z")
+
+
+def run_header(wall_time: float, jobs: int, versions: Mapping[str, str],
+               command: str) -> list[tuple[str, str]]:
+    """The header rows that say how a study ran: wall time and workers, the code, Python,
+    the machine, the engines' versions and the command (empty: the Python API)."""
+    return [
+        ("Wall time", f"{wall_time:.1f} s on {jobs} worker(s)"),
+        ("rockbench", provenance.describe()),
+        ("Python", python_version()),
+        ("Machine (CPU)", cpu_model()),
+        ("Engine versions", ", ".join(f"{e} {v}" for e, v in versions.items())),
+        ("Command", command or "(Python API)"),
+    ]
 
 
 def status_legend() -> list[tuple[str, str, str]]:

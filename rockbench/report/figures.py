@@ -32,8 +32,8 @@ from rockbench.scenarios import Scenario
 from rockbench.studies.pareto import pareto_front
 from rockbench.trajectory import Status, Trajectory
 
-__all__ = ["MethodStyle", "method_styles", "time_history_figure", "peak_input_figure",
-           "accuracy_speed_figure", "sensitivity_figure", "SpeedPoint",
+__all__ = ["MethodStyle", "method_styles", "save_figure", "time_history_figure",
+           "peak_input_figure", "accuracy_speed_figure", "sensitivity_figure", "SpeedPoint",
            "variations_speed_figure"]
 
 _COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
@@ -83,7 +83,8 @@ def method_styles(methods: Sequence[Method]) -> dict[str, MethodStyle]:
     return out
 
 
-def _save(fig: Figure, path: Path) -> Path:
+def save_figure(fig: Figure, path: Path) -> Path:
+    """Draw ``fig`` with the Agg canvas into the PNG ``path`` (its folder made); return it."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     FigureCanvasAgg(fig)
@@ -203,7 +204,7 @@ def time_history_figure(path: Path, scenario: Scenario, trajs: Mapping[str, Traj
     fig.suptitle(f"{scenario.name}  ({desc})", fontsize=11)
     fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 5),
                fontsize=9, frameon=False)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def peak_input_figure(path: Path, title: str, scenarios: Sequence[Scenario],
@@ -299,7 +300,7 @@ def peak_input_figure(path: Path, title: str, scenarios: Sequence[Scenario],
     order += [k for k in handles if k not in order]
     fig.legend(handles=[handles[k] for k in order], loc="outside right center", fontsize=8.5,
                frameon=False)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 @dataclass(frozen=True)
@@ -405,7 +406,7 @@ def accuracy_speed_figure(path: Path, points: Sequence[SpeedPoint],
     axes[1].set_title("(b) peak error", fontsize=10)
     fig.suptitle("Accuracy versus speed against the analytic reference"
                  + (f" — {subtitle}" if subtitle else ""), fontsize=11)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def sensitivity_figure(path: Path, scenario: Scenario, knob_title: str,
@@ -457,7 +458,7 @@ def sensitivity_figure(path: Path, scenario: Scenario, knob_title: str,
     axes[-1].set_xlabel("time t (s)")
     axes[-1].set_xlim(0.0, scenario.duration)
     fig.suptitle(f"{scenario.name}: {knob_title}", fontsize=11)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def variations_speed_figure(path: Path, points: Sequence[SpeedPoint],
@@ -526,4 +527,4 @@ def variations_speed_figure(path: Path, points: Sequence[SpeedPoint],
                 Line2D([], [], ls="--", color="0.55", label="Pareto front (labelled)")]
     fig.legend(handles=handles, loc="outside right center", fontsize=8.5, frameon=False)
     fig.suptitle(title, fontsize=11)
-    return _save(fig, path)
+    return save_figure(fig, path)

@@ -12,7 +12,6 @@ run.
 from __future__ import annotations
 
 import csv
-import datetime as _dt
 import math
 from pathlib import Path
 
@@ -21,8 +20,13 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
-from rockbench import provenance
-from rockbench.report.document import Document, FigureItem, Section, cpu_model, python_version
+from rockbench.report.document import (
+    Document,
+    FigureItem,
+    Section,
+    report_date,
+    run_header,
+)
 from rockbench.report.html import write_document
 from rockbench.report.tables import Cell, Table
 from rockbench.studies.planarity import (
@@ -309,16 +313,11 @@ def write_report(result: PlanarityResult, out: Path, *, embed_figures: bool = Tr
         sections.append(ssec)
     opts = result.options
     header = [
-        ("Date", _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M:%S %Z")),
+        ("Date", report_date()),
         ("Scenes", ", ".join(s.name for s in result.scenes)),
         ("Runs", f"{result.ran + result.reused}: {result.ran} run now, {result.reused} reused"),
         ("Tolerance", f"2D peak within {100 * opts.tolerance:g} % of the 3D peak"),
-        ("Wall time", f"{result.wall_time:.1f} s on {opts.execution.jobs} worker(s)"),
-        ("rockbench", provenance.describe()),
-        ("Python", python_version()),
-        ("Machine (CPU)", cpu_model()),
-        ("Engine versions", ", ".join(f"{e} {v}" for e, v in result.versions.items())),
-        ("Command", opts.command or "(Python API)"),
+        *run_header(result.wall_time, opts.execution.jobs, result.versions, opts.command),
     ]
     doc = Document(
         title="rockbench planarity report", header=header,

@@ -12,16 +12,20 @@ time; the contact point's path seen from above, against the closed form's circle
 from __future__ import annotations
 
 import csv
-import datetime as _dt
 import math
 from pathlib import Path
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from rockbench import provenance
-from rockbench.report.document import Document, FigureItem, Section, cpu_model, python_version
+from rockbench.report.document import (
+    Document,
+    FigureItem,
+    Section,
+    report_date,
+    run_header,
+)
+from rockbench.report.figures import save_figure
 from rockbench.report.html import write_document
 from rockbench.report.tables import Cell, Table
 from rockbench.studies.references_3d import (
@@ -35,7 +39,6 @@ from rockbench.studies.references_3d import (
 
 __all__ = ["write_report", "drift_figure", "contact_figure", "CITATION"]
 
-_DPI = 110
 #: The references behind the three scenes.
 CITATION = ("G. W. Housner, \u201cThe behavior of inverted pendulum structures during "
             "earthquakes\u201d, Bull. Seismol. Soc. Am. 53 (1963); M. F. Vassiliou et al., "
@@ -61,7 +64,6 @@ def _measured(result: References3DResult) -> list[Errors3D]:
 def drift_figure(path: Path, result: References3DResult) -> Path:
     """The precession's tilt minus its closed-form 0.2 rad against time, one line per method."""
     fig = Figure(figsize=(7.5, 3.6))
-    FigureCanvasAgg(fig)
     ax = fig.subplots()
     _, sp = precession()
     for r in _measured(result):
@@ -79,15 +81,12 @@ def drift_figure(path: Path, result: References3DResult) -> Path:
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, loc="best")
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=_DPI)
-    return path
+    return save_figure(fig, path)
 
 
 def contact_figure(path: Path, result: References3DResult) -> Path:
     """The contact point's path seen from above per method, and the closed form's circle."""
     fig = Figure(figsize=(5.6, 5.2))
-    FigureCanvasAgg(fig)
     ax = fig.subplots()
     _, sp = precession()
     phi = np.linspace(0.0, 2.0 * math.pi, 361)
@@ -105,9 +104,7 @@ def contact_figure(path: Path, result: References3DResult) -> Path:
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, loc="upper right")
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=_DPI)
-    return path
+    return save_figure(fig, path)
 
 
 def _verdict(flag: bool | None, yes: str, no: str) -> Cell:
@@ -207,7 +204,7 @@ def write_report(result: References3DResult, out: Path, *, embed_figures: bool =
     opts = result.options
     _, sp = precession(opts.duration)
     header = [
-        ("Date", _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M:%S %Z")),
+        ("Date", report_date()),
         ("Scenes", f"drum release (R 0.15 m, H 1.0 m, 0.5 λ, in the x–z plane); corner "
                    f"release (0.3 × 0.3 × 1.2 m pillar, 0.5 λ along its diagonal); steady "
                    f"precession (R 0.3 m, H 1.5 m, tilt {sp.theta:g} rad, Ω "
@@ -216,12 +213,7 @@ def write_report(result: References3DResult, out: Path, *, embed_figures: bool =
                    f"rad, tilt drift {BOUNDS[3]:g} rad"),
         ("Runs", f"{result.ran + result.reused}: {result.ran} run now, {result.reused} "
                  "reused"),
-        ("Wall time", f"{result.wall_time:.1f} s on {opts.execution.jobs} worker(s)"),
-        ("rockbench", provenance.describe()),
-        ("Python", python_version()),
-        ("Machine (CPU)", cpu_model()),
-        ("Engine versions", ", ".join(f"{e} {v}" for e, v in result.versions.items())),
-        ("Command", opts.command or "(Python API)"),
+        *run_header(result.wall_time, opts.execution.jobs, result.versions, opts.command),
     ]
     doc = Document(
         title="rockbench 3D references report", header=header,

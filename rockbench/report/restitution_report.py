@@ -10,7 +10,6 @@ the same slenderness, a figure of η over Housner's η against λ, and
 from __future__ import annotations
 
 import csv
-import datetime as _dt
 import math
 from pathlib import Path
 
@@ -18,9 +17,14 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from rockbench import provenance
 from rockbench.analytic.overturning import housner_eta
-from rockbench.report.document import Document, FigureItem, Section, cpu_model, python_version
+from rockbench.report.document import (
+    Document,
+    FigureItem,
+    Section,
+    report_date,
+    run_header,
+)
 from rockbench.report.figures import method_styles
 from rockbench.report.html import write_document
 from rockbench.report.tables import Cell, Table
@@ -198,16 +202,11 @@ def write_report(result: RestitutionResult, out: Path, *, embed_figures: bool = 
     xsec.items.append(_experiments_table(len(scenarios) + 1))
     opts = result.options
     header = [
-        ("Date", _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M:%S %Z")),
+        ("Date", report_date()),
         ("Blocks", ", ".join(scenarios)),
         ("Runs", f"{result.ran + result.reused}: {result.ran} run now, {result.reused} reused; "
                  f"at most {opts.impacts} impacts measured per run"),
-        ("Wall time", f"{result.wall_time:.1f} s on {opts.execution.jobs} worker(s)"),
-        ("rockbench", provenance.describe()),
-        ("Python", python_version()),
-        ("Machine (CPU)", cpu_model()),
-        ("Engine versions", ", ".join(f"{e} {v}" for e, v in result.versions.items())),
-        ("Command", opts.command or "(Python API)"),
+        *run_header(result.wall_time, opts.execution.jobs, result.versions, opts.command),
     ]
     doc = Document(
         title="rockbench restitution report", header=header,

@@ -11,7 +11,6 @@ path seen from above) and ``wobbling.csv`` with every run.
 from __future__ import annotations
 
 import csv
-import datetime as _dt
 import math
 import textwrap
 from pathlib import Path
@@ -20,8 +19,13 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from rockbench import provenance
-from rockbench.report.document import Document, FigureItem, Section, cpu_model, python_version
+from rockbench.report.document import (
+    Document,
+    FigureItem,
+    Section,
+    report_date,
+    run_header,
+)
 from rockbench.report.html import write_document
 from rockbench.report.tables import Cell, Table
 from rockbench.studies.wobbling import (
@@ -331,7 +335,7 @@ def write_report(result: WobblingResult, out: Path, *, embed_figures: bool = Tru
     paper.items.append(_paper_table())
     ref = result.reference_peak
     header = [
-        ("Date", _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M:%S %Z")),
+        ("Date", report_date()),
         ("Scenario", f"{result.scenario.name} ({result.scenario.duration:g} s); asymmetric: "
                      f"{result.asymmetric.name}"),
         ("λ", f"{result.lam:.5f} rad; planar threshold {opts.threshold:g} λ = "
@@ -339,12 +343,7 @@ def write_report(result: WobblingResult, out: Path, *, embed_figures: bool = Tru
         ("Reference", f"planar, max |θ|/λ = {_g(ref, '{:.4f}')}"),
         ("Runs", f"{result.ran + result.reused}: {result.ran} run now, {result.reused} "
                  "reused"),
-        ("Wall time", f"{result.wall_time:.1f} s on {opts.execution.jobs} worker(s)"),
-        ("rockbench", provenance.describe()),
-        ("Python", python_version()),
-        ("Machine (CPU)", cpu_model()),
-        ("Engine versions", ", ".join(f"{e} {v}" for e, v in result.versions.items())),
-        ("Command", opts.command or "(Python API)"),
+        *run_header(result.wall_time, opts.execution.jobs, result.versions, opts.command),
     ]
     doc = Document(
         title="rockbench wobbling report", header=header,
