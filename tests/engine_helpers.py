@@ -139,11 +139,12 @@ def check_base_drives_y_and_z(engine: Engine, *, z_tol: float, theta_tol: float 
 SINGLE2_Y = Block(SINGLE2.depth, SINGLE2.width, SINGLE2.height, density=2670.0)
 
 
-def check_rides_a_base_along_y(engine: Engine, *, y_tol: float, still_tol: float = 1e-6
-                               ) -> None:
+def check_rides_a_base_along_y(engine: Engine, *, y_tol: float, still_tol: float = 1e-6,
+                               end_tol: float = 1e-6) -> None:
     """Single #2 turned by 90° under 0.8 of its uplift acceleration along y (g · depth /
-    height) rides the base: its y within ``y_tol`` of the base's throughout and at the end,
-    no rocking either way and no drift along x (within ``still_tol``)."""
+    height) rides the base: its y within ``y_tol`` of the base's throughout and within
+    ``end_tol`` of the base's end position, no rocking either way and no drift along x
+    (within ``still_tol``)."""
     f = 3.0
     amp = 0.8 * 9.81 * (SINGLE2_Y.depth / SINGLE2_Y.height) / (2 * math.pi * f) ** 2
     sc = Scenario("side", SINGLE2_Y, excitation=Components(y=SinePulse(f, amp)), duration=1.0)
@@ -151,7 +152,7 @@ def check_rides_a_base_along_y(engine: Engine, *, y_tol: float, still_tol: float
     assert tr.status is Status.OK, tr.message
     uy = sc.motion.y.displacement(tr.t)
     assert np.max(np.abs(tr.y[:, 0] - uy)) < y_tol
-    assert tr.y[-1, 0] == pytest.approx(2 * math.pi * amp, abs=1e-6)
+    assert tr.y[-1, 0] == pytest.approx(2 * math.pi * amp, abs=end_tol)
     assert np.max(np.abs(tr.roll)) < still_tol and np.max(np.abs(tr.theta)) < still_tol
     assert np.max(np.abs(tr.x)) < still_tol
 

@@ -15,7 +15,11 @@ import pytest
 from engine_helpers import (
     SINGLE2,
     check_assembly_stays_at_rest,
+    check_base_drives_y_and_z,
     check_base_follows_excitation,
+    check_cylinder_rocks_like_housner,
+    check_rides_a_base_along_y,
+    check_rocks_about_x_like_housner,
     check_sine_pulse_peak,
     check_slides_like_coulomb,
     check_stack_follows_two_block,
@@ -30,7 +34,7 @@ from rockbench.engines.blender_engine import BLENDER_DEFAULTS, BlenderEngine, Bl
 from rockbench.engines.drive import BaseDrive
 from rockbench.engines.testing import B2
 from rockbench.errors import EngineUnavailable
-from rockbench.geometry import Geometry, Support
+from rockbench.geometry import Cylinder, Geometry, Support
 from rockbench.metrics import impact_times
 from rockbench.scenarios import (
     Block,
@@ -43,6 +47,7 @@ from rockbench.scenarios import (
     get_scenario,
     get_suite,
 )
+from rockbench.scenarios.excitation import Components
 from rockbench.trajectory import Status
 
 needs_bpy = pytest.mark.skipif(importlib.util.find_spec("bpy") is None,
@@ -467,3 +472,81 @@ def test_slides_like_the_exact_coulomb_solution(engine: BlenderEngine, case: str
 def test_stack_follows_the_two_block_solution(engine: BlenderEngine, case: str,
                                               tol: float) -> None:
     check_stack_follows_two_block(engine, case, tol, slip=5e-4, gap=1e-4)
+
+
+# ---------------------------------------------------------------- base motion along y and z
+@needs_bpy
+def test_base_drives_y_and_z(engine: BlenderEngine) -> None:
+    """The engines' common check: Single #2 rides a base moving vertically and is carried
+    by friction along y. ``planar`` (set by accurate and fast) is ignored, not refused, for
+    a base moving along y: the block is then built free."""
+    assert BlenderEngine.capabilities.base_axes == "xyz"
+    # measured: z lags the base by one Bullet step, 1.5e-5 m (7.5e-6 m at half the step);
+    # the y drag's end within 9.4e-7 m, x within 2.4e-6 m
+    check_base_drives_y_and_z(engine, z_tol=3e-5, drag_tol=5e-6, planar=False)
+
+
+@needs_bpy
+def test_a_base_moving_along_y_carries_the_block(engine: BlenderEngine) -> None:
+    # measured: the free block lags the base by one Bullet step (1.5e-5 m at most) and ends
+    # 5.9e-6 m behind it (2.2e-6 m at half the step); its roll reaches 1.5e-6 rad
+    check_rides_a_base_along_y(engine, y_tol=3e-5, still_tol=3e-6, end_tol=1.2e-5)
+
+
+@needs_bpy
+def test_a_block_excited_along_y_rocks_about_x_like_housner(engine: BlenderEngine) -> None:
+    # measured: peak roll −0.017 % of Housner's, the roll within 4.6e-4 λ of −θ_ref,
+    # θ within 1.3e-6 rad and x within 1.4e-5 m
+    check_rocks_about_x_like_housner(engine, shape_tol=1e-3, plane_tol=3e-5)
+
+
+@needs_bpy
+def test_motor_drive_refuses_a_base_off_the_x_axis(engine: BlenderEngine) -> None:
+    sc = Scenario("up", SINGLE2, excitation=Components(z=SinePulse(4.0, 0.003)), duration=0.1)
+    tr = engine.simulate(sc, {"drive": "motor"})
+    assert tr.status is Status.UNSUPPORTED and "along x only" in tr.message
+
+
+# ---------------------------------------------------------------- cylinders
+# Measured (docs/engines/blender.md, "Cylinders and 3D starts"): the drum's first impact
+# −0.013 % (accurate) / −0.155 % (fast), θ within 1.4e-4 / 1.6e-3 λ, roll and twist
+# ≤ 4.4e-13 / 8.6e-11 rad (the planar constraint); free (planar off) −0.064 %, 8.5e-6 rad.
+@needs_bpy
+@pytest.mark.parametrize(("preset", "rel", "plane_tol"),
+                         [("accurate", 3e-4, 1e-12), ("fast", 3e-3, 2e-10),
+                          ({"planar": False}, 1.3e-3, 2e-5)])
+def test_cylinder_rocks_like_housner(engine: BlenderEngine, preset: object, rel: float,
+                                     plane_tol: float) -> None:
+    check_cylinder_rocks_like_housner(engine, preset, rel=rel, plane_tol=plane_tol)
+
+
+class _ShapeProbe(BlenderEngine):
+    """Reads the first body's rigid body and bounds back from bpy at build."""
+
+    def _build(self, scenario: Scenario, settings: object) -> float:
+        dt = super()._build(scenario, settings)  # type: ignore[arg-type]
+        ob = self._blocks[0]
+        self.shape = (ob.rigid_body.collision_shape, ob.rigid_body.mass, tuple(ob.dimensions))
+        return dt
+
+
+@needs_bpy
+@pytest.mark.parametrize("preset", ["accurate", "fast", {"planar": False}])
+def test_a_cylinder_is_built_as_a_cylinder(preset: object) -> None:
+    drum = Cylinder(0.15, 1.0, density=2500.0)
+    sc = Scenario("drum-rest", drum, duration=0.5)
+    probe = _ShapeProbe()
+    probe.check_supported(sc)  # raises UnsupportedScenario if not
+    tr = probe.simulate(sc, preset)
+    # Blender's CYLINDER shape, sized by the object's bounds 2R x 2R x H, the body's mass
+    shape, mass, dims = probe.shape
+    assert shape == "CYLINDER" and mass == pytest.approx(drum.m, rel=1e-6)
+    assert dims == pytest.approx((0.3, 0.3, 1.0), rel=1e-6)
+    assert tr.status is Status.OK, tr.message
+    # standing on its base it stays at rest, its centre H/2 above the ground (a 2R x 2R
+    # box would stand as tall; on its side below a cylinder would roll and a box not)
+    # measured (fast, the largest): z 8.9e-8 m (float32), x 1.1e-6 m, y 5.4e-7 m, tilt
+    # 2.6e-6 rad; accurate: 0, 1.7e-7 m, 7.0e-10 m, 4.2e-9 rad
+    assert np.max(np.abs(tr.z[:, 0] - drum.h)) < 2e-7
+    assert np.max(np.abs(tr.x)) < 2.5e-6 and np.max(np.abs(tr.y)) < 2.5e-6
+    assert np.max(tr.tilt) < 5e-6

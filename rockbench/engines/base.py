@@ -100,7 +100,7 @@ from rockbench.engines.drive import BaseDrive
 from rockbench.engines.overlap import OverlapWatch
 from rockbench.engines.settings import EngineSettings, KnobRole, SettingsError
 from rockbench.errors import EngineUnavailable, UnsupportedScenario
-from rockbench.geometry import Block
+from rockbench.geometry import Block, Cylinder
 from rockbench.limits import check_memory
 from rockbench.scenarios import Scenario
 from rockbench.trajectory import (
@@ -205,7 +205,8 @@ class Capabilities:
         Why not, when ``assemblies`` is False (the unsupported status says it).
     prisms : bool
         Whether an assembly's blocks may be convex polygonal prisms
-        (:class:`~rockbench.scenarios.assembly.Prism`) besides rectangular blocks.
+        (:class:`~rockbench.geometry.Prism`) besides rectangular blocks (and
+        cylinders, which ``cylinders`` declares).
     no_prisms : str
         Why not, when ``prisms`` is False (the unsupported status says it).
     base_axes : str
@@ -379,7 +380,7 @@ class Engine(ABC):
             raise UnsupportedScenario(
                 f"{self.name} starts bodies at rest in the x–z plane only; this scenario "
                 f"starts them {'moving' if scenario.moving_start else 'tilted out of it'}")
-        if not cap.prisms and not all(isinstance(b, Block) for b in scenario.blocks):
+        if not cap.prisms and not all(isinstance(b, (Block, Cylinder)) for b in scenario.blocks):
             raise UnsupportedScenario(
                 f"{self.name} builds rectangular blocks only: {cap.no_prisms}")
         other = tuple(a for a in scenario.motion.axes if a not in cap.base_axes)

@@ -15,7 +15,8 @@ Time stepping is Blender's: each frame of 1/``fps`` s is split into
 only when the scene moves to the next frame, so the base class sees one frame as its
 step. The base is placed at the exact u_g of every frame and Blender interpolates it
 linearly in between, so its velocity is the frame's secant (``drive`` selects a motor
-constraint instead). The base motion is applied along x only. A base that travels
+constraint instead). The base motion is applied along x, y and z (the base placed at
+(u_x, u_y, u_z); ``drive="motor"`` slides it along x only). A base that travels
 without bound (a :class:`~rockbench.scenarios.TiltTable`'s ramp) is kept still and
 gravity is tilted by −ü_g instead: single-precision Bullet cannot follow a base tens of
 metres away.
@@ -24,13 +25,19 @@ Presets and knobs:
 
 * ``accurate`` (the defaults): 1000 fps × 10 sub-steps (Δt 0.1 ms), 20 iterations,
   ``planar``: each block held in the x–z plane by a rigid body constraint from the
-  base, which removes the pivot creep and out-of-plane wobble of free blocks.
+  base, which removes the pivot creep and out-of-plane wobble of free blocks (ignored,
+  the blocks built free, for a base moving along y or a 3D start).
 * ``fast``: Δt 1 ms (one sub-step per frame), 50 iterations, ``planar``.
 * ``paper``: the paper's set-up (240 fps × 20 sub-steps, 100 iterations, box shapes,
   1e-5 m margin, split impulse off, free blocks); the ``paper-sensitivity`` suite
   varies it.
 * The paper's Table 2 knobs: ``fps``, ``substeps_per_frame``, ``solver_iterations``,
   ``collision_shape``, ``collision_margin`` (with ``use_margin``).
+
+A :class:`~rockbench.geometry.Cylinder` is Blender's CYLINDER collision shape (Bullet's
+btCylinderShapeZ, axis along the body's z), sized by its mesh's bounds, with the body's
+mass; bpy exposes no inertia, so it is Bullet's own of the solid cylinder. 3D starts are
+unsupported: Blender has no initial velocity for a rigid body.
 
 Known limits: Bullet's contact breaking threshold, which Blender does not expose, keeps
 a lifted corner in contact late in free rocking (the slender B0 is the least accurate);
@@ -57,7 +64,7 @@ from rockbench.engines.drive import BaseDrive
 from rockbench.engines.friction import product_frictions
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import EngineUnavailable, UnsupportedScenario
-from rockbench.geometry import Support
+from rockbench.geometry import Cylinder, Support
 from rockbench.scenarios import Scenario
 
 __all__ = ["BlenderEngine", "BlenderSettings", "BLENDER_DEFAULTS", "BPY_PYTHON"]
@@ -134,6 +141,7 @@ class BlenderSettings(EngineSettings):
         locked, x, z and the rocking angle free. Without it Bullet's contact friction
         lets the sticking pivot creep and the block twist out of plane, the main error
         of free rocking (see the engine's documentation page). The paper's blocks were free (False).
+        Ignored (the blocks built free) for a base moving along y and for a 3D start.
     """
 
     fps: float = 1000.0
@@ -186,6 +194,7 @@ class BlenderEngine(Engine):
     name: ClassVar[str] = "blender"
     capabilities: ClassVar[Capabilities] = Capabilities(
         dimensions=3, max_blocks=None, chamfer=True, assemblies=True, prisms=False,
+        base_axes="xyz", cylinders=True,
         no_prisms=("Bullet gives a convex hull the inertia of its bounding box and bpy exposes "
                    "no inertia (a voussoir of arch-9v-t0.15 would get +16 to +70 % about y), "
                    "and hulls not symmetric about their centroid explode at the first step in "
@@ -242,7 +251,11 @@ class BlenderEngine(Engine):
         #: A base that runs away (a tilting table), run in its own frame as tilted gravity.
         self._tilt = False
         self._g = 9.81
-        self._u: list[float] = []
+        self._u: list[Any] = []
+        self._axes: tuple[str, ...] = ("x",)
+        #: Rest locations of the base and the supports (x, y, z), moved by u_g off the x axis.
+        self._base_rest: tuple[float, float, float] = (0.0, 0.0, 0.0)
+        self._support_rest: list[tuple[float, ...]] = []
         self._poses = np.zeros((0, 7))
         #: Where the base ended (m along x), recorded at teardown.
         self.base_end = math.nan
@@ -337,6 +350,14 @@ class BlenderEngine(Engine):
         self._tilt = _runs_away(drive)
         moving = drive.moving and not self._tilt
         motor = moving and s.drive == "motor"
+        self._axes = drive.axes
+        if motor and self._axes != ("x",):
+            raise UnsupportedScenario("blender: drive='motor' slides the base along x only; "
+                                      "a base motion along y or z needs drive='kinematic'")
+        # the planar constraint holds a block in the base's x–z plane: a scene that leaves it
+        # (a base moving along y, a cylinder, a 3D start) builds free bodies whatever it says
+        planar = s.planar and _stays_planar(scenario, drive)
+        self._base_rest = (0.0, 0.0, -half[2])
         _rigid_body(bpy, base, s, type_="ACTIVE" if motor else "PASSIVE", shape="BOX",
                     mass=_MOTOR_BASE_MASS * sum(b.m for b in blocks) if motor else 1.0,
                     friction=mus[0], restitution=e, kinematic=moving and not motor)
@@ -352,10 +373,26 @@ class BlenderEngine(Engine):
             _rigid_body(bpy, ob, s, type_="PASSIVE", shape=shape, mass=1.0,
                         friction=mus[0], restitution=e, kinematic=moving)
             self._supports.append((ob, float(ob.location.x)))
+        self._support_rest = [tuple(ob.location) for ob, _ in self._supports]
 
         self._blocks = []
+        states = scenario.initial_states()
         for i, (blk, (cx, cz, a), mu) in enumerate(zip(
                 blocks, scenario.initial_poses(), mus[1:], strict=True)):
+            if isinstance(blk, Cylinder):
+                # Bullet's own cylinder (btCylinderShapeZ, axis along the object's z) sized
+                # by the mesh's bounds; its mass set, its inertia Bullet's exact solid
+                # cylinder's (bpy exposes none), its margin inside the radius and height
+                ob = _cylinder(bpy, scene, f"block{i}", blk.radius, blk.height)
+                ob.location = tuple(states[i, :3].tolist())
+                ob.rotation_mode = "QUATERNION"
+                ob.rotation_quaternion = tuple(states[i, 3:7].tolist())
+                _rigid_body(bpy, ob, s, type_="ACTIVE", shape="CYLINDER", mass=blk.m,
+                            friction=mu, restitution=e, kinematic=False)
+                self._blocks.append(ob)
+                if planar:
+                    _planar_constraint(bpy, scene, base, ob)
+                continue
             shape = _SHAPES[s.collision_shape]
             if blk.chamfer > 0.0 and shape == "BOX":
                 shape = "CONVEX_HULL"
@@ -370,7 +407,7 @@ class BlenderEngine(Engine):
             _rigid_body(bpy, ob, s, type_="ACTIVE", shape=shape, mass=blk.m, friction=mu,
                         restitution=e, kinematic=False)
             self._blocks.append(ob)
-            if s.planar:
+            if planar:
                 _planar_constraint(bpy, scene, base, ob)
         self._poses = np.zeros((len(blocks), 7))
 
@@ -379,8 +416,14 @@ class BlenderEngine(Engine):
         if moving:
             t = drive.grid(frame, n_frames + 1)
             t_key = np.arange(n_frames // s.substeps_per_frame + 2) / s.fps if split else t
-            u = drive.displacement(np.minimum(t_key, drive.end_time))[:, 0]
-            self._u = (np.interp(t, t_key, u) if split else u).tolist()
+            u3 = drive.displacement(np.minimum(t_key, drive.end_time))
+            if self._axes == ("x",):  # the planar benchmark's values, bit for bit
+                u = u3[:, 0]
+                self._u = (np.interp(t, t_key, u) if split else u).tolist()
+            else:  # (x, y, z) per frame
+                if split:
+                    u3 = np.column_stack([np.interp(t, t_key, u3[:, k]) for k in range(3)])
+                self._u = [tuple(p) for p in u3.tolist()]
         else:
             self._u = []
         self._view_layer = scene.view_layers[0]
@@ -392,8 +435,12 @@ class BlenderEngine(Engine):
         if self._tilt:
             # in the base's frame every body feels −m·ü_g besides its weight: exact for a
             # translating base; ü_g is linear in t, so its mid-frame value is the frame's mean
-            a = float(self.drive.acceleration(t + 0.5 * dt)[0])
-            self._scene.gravity = (-a, 0.0, -self._g)
+            if self._axes == ("x",):
+                a = float(self.drive.acceleration(t + 0.5 * dt)[0])
+                self._scene.gravity = (-a, 0.0, -self._g)
+            else:
+                ax, ay, az = self.drive.acceleration(t + 0.5 * dt).tolist()
+                self._scene.gravity = (-ax, -ay, -self._g - az)
             return
         # the frame ending at t + dt: the base is there when Blender steps into it
         i = min(int(round(t / dt)) + 1, len(self._u) - 1)
@@ -412,11 +459,21 @@ class BlenderEngine(Engine):
             self._place_base(self._u[-1])
         return True
 
-    def _place_base(self, u: float) -> None:
-        """Put the base (and the supports) at displacement ``u`` and evaluate the scene."""
-        self._base.location.x = u
-        for ob, x0 in self._supports:
-            ob.location.x = x0 + u
+    def _place_base(self, u: float | tuple[float, ...]) -> None:
+        """Put the base (and the supports) at displacement ``u`` and evaluate the scene.
+
+        ``u`` is the x displacement of a base moving along x only (the planar benchmark's
+        path, bit for bit), else the (x, y, z) displacement.
+        """
+        if isinstance(u, float):
+            self._base.location.x = u
+            for ob, x0 in self._supports:
+                ob.location.x = x0 + u
+        else:
+            b0 = self._base_rest
+            self._base.location = (b0[0] + u[0], b0[1] + u[1], b0[2] + u[2])
+            for (ob, _), r in zip(self._supports, self._support_rest, strict=True):
+                ob.location = (r[0] + u[0], r[1] + u[1], r[2] + u[2])
         self._view_layer.update()
 
     def _advance(self, n: int) -> None:
@@ -433,7 +490,10 @@ class BlenderEngine(Engine):
             p = m.translation
             out[i] = (p.x, p.y, p.z, q.w, q.x, q.y, q.z)
         if self._tilt:  # from the base's frame to the world's
-            out[:, 0] += self._tilt_displacement()
+            if self._axes == ("x",):
+                out[:, 0] += self._tilt_displacement()
+            else:
+                out[:, :3] += self.drive.displacement((self._frame - 1) * self._frame_length)
         return out
 
     def _tilt_displacement(self) -> float:
@@ -452,6 +512,17 @@ class BlenderEngine(Engine):
         self._blocks = []
         self._supports = []
         self._u = []
+
+
+def _stays_planar(scenario: Scenario, drive: BaseDrive) -> bool:
+    """Whether the ``planar`` constraint may hold the scene's blocks in the x–z plane.
+
+    It locks each block's y, roll and yaw to the base: a base moving along y would carry
+    the blocks rigidly along y, and a 3D start's motion leaves the plane, so such a scene
+    is built with free bodies (the knob ignored, not refused: the ``accurate`` and
+    ``fast`` presets set it). A cylinder released in the plane keeps it.
+    """
+    return "y" not in drive.axes and scenario.planar_start and not scenario.moving_start
 
 
 def _runs_away(drive: BaseDrive) -> bool:
@@ -530,6 +601,31 @@ def _prism(bpy: Any, scene: Any, name: str, profile: np.ndarray, half_depth: flo
     faces: list[tuple[int, ...]] = [(2 * j, 2 * ((j + 1) % k), 2 * ((j + 1) % k) + 1, 2 * j + 1)
                                     for j in range(k)]
     faces += [tuple(2 * j for j in range(k)), tuple(2 * j + 1 for j in reversed(range(k)))]
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(verts, [], faces)
+    mesh.update()
+    ob = bpy.data.objects.new(name, mesh)
+    scene.collection.objects.link(ob)
+    return ob
+
+
+def _cylinder(bpy: Any, scene: Any, name: str, radius: float, height: float,
+              n: int = 64) -> Any:
+    """A mesh object: an ``n``-gon prism about z whose bounds are 2R × 2R × H (centred).
+
+    Blender sizes a CYLINDER collision shape from the object's bounds (radius: half the
+    larger of the x and y extents, height: the z extent), so its vertices include the
+    four points (±R, 0) and (0, ±R) of the rim.
+    """
+    if n % 4:
+        raise ValueError(f"n must be a multiple of 4, got {n}")
+    ring = [(radius * math.cos(2 * math.pi * j / n), radius * math.sin(2 * math.pi * j / n))
+            for j in range(n)]
+    hz = 0.5 * height
+    verts = [(x, y, z) for x, y in ring for z in (-hz, hz)]
+    faces: list[tuple[int, ...]] = [(2 * j, 2 * ((j + 1) % n), 2 * ((j + 1) % n) + 1, 2 * j + 1)
+                                    for j in range(n)]
+    faces += [tuple(2 * j for j in reversed(range(n))), tuple(2 * j + 1 for j in range(n))]
     mesh = bpy.data.meshes.new(name)
     mesh.from_pydata(verts, [], faces)
     mesh.update()
