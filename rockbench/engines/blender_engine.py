@@ -601,6 +601,12 @@ def _prism(bpy: Any, scene: Any, name: str, profile: np.ndarray, half_depth: flo
     faces: list[tuple[int, ...]] = [(2 * j, 2 * ((j + 1) % k), 2 * ((j + 1) % k) + 1, 2 * j + 1)
                                     for j in range(k)]
     faces += [tuple(2 * j for j in range(k)), tuple(2 * j + 1 for j in reversed(range(k)))]
+    return _mesh_object(bpy, scene, name, verts, faces)
+
+
+def _mesh_object(bpy: Any, scene: Any, name: str, verts: list[tuple[float, float, float]],
+                 faces: list[tuple[int, ...]]) -> Any:
+    """A mesh object of these vertices and faces, linked into the scene."""
     mesh = bpy.data.meshes.new(name)
     mesh.from_pydata(verts, [], faces)
     mesh.update()
@@ -626,12 +632,7 @@ def _cylinder(bpy: Any, scene: Any, name: str, radius: float, height: float,
     faces: list[tuple[int, ...]] = [(2 * j, 2 * ((j + 1) % n), 2 * ((j + 1) % n) + 1, 2 * j + 1)
                                     for j in range(n)]
     faces += [tuple(2 * j for j in reversed(range(n))), tuple(2 * j + 1 for j in range(n))]
-    mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata(verts, [], faces)
-    mesh.update()
-    ob = bpy.data.objects.new(name, mesh)
-    scene.collection.objects.link(ob)
-    return ob
+    return _mesh_object(bpy, scene, name, verts, faces)
 
 
 def _support(bpy: Any, scene: Any, k: int, sup: Support, depth: float,
