@@ -11,11 +11,17 @@ compiles them beforehand.
 Scene: one :class:`newton.ModelBuilder` per run. Each block is a free body whose
 frame is the block's (origin at its centre of gravity) with the block's mass and full
 inertia tensor (``lock_inertia``: its shapes have no density), and one collision
-shape: a box, or the convex hull of its prism (a chamfered block, a polygonal prism).
-The base is a box whose top face is z = 0 and the fixed supports are more shapes of
-it: static shapes in free rocking, otherwise shapes of a KINEMATIC body whose pose and
-velocity the plugin writes before every step (the base motion along x, y and z). No
-damping, no sleeping. Newton gives a contact the *mean* of its two shapes' friction
+shape: a box, or the convex hull of its prism (a chamfered block, a polygonal prism); a
+cylinder is Newton's cylinder shape (its axis along the body's z). A start in the x–z
+plane at rest is placed from ``initial_poses`` as it always was (bit-identical planar
+runs); any other from ``initial_states``: position, quaternion and the velocities of
+the centre of gravity (``body_qd``: linear, angular, world axes), written to the free
+joint's coordinates too for the joint-space solvers. The base is a box whose top face is
+z = 0 (the plane z = 0 in a scene with a cylinder: Newton's cylinder–plane routine,
+rather than the generic convex one of a cylinder against a box) and the fixed supports
+are more shapes of it: static shapes in free rocking, otherwise shapes of a KINEMATIC
+body whose pose and velocity the plugin writes before every step (the base motion along
+x, y and z). No damping, no sleeping. Newton gives a contact the *mean* of its two shapes' friction
 coefficients (:func:`~rockbench.engines.friction.mean_frictions` chooses them so that
 each pair gets the scenario's μ or μ_if) and its torsional and rolling friction, which
 Newton enables by default (0.005 m and 1e-4 m: resistances Housner's block does not have),
@@ -75,7 +81,7 @@ from rockbench.engines.drive import BaseDrive
 from rockbench.engines.friction import mean_frictions
 from rockbench.engines.settings import EngineSettings, KnobRole
 from rockbench.errors import UnsupportedScenario
-from rockbench.geometry import Block, Support, stack
+from rockbench.geometry import Block, Cylinder, Support, stack
 from rockbench.scenarios import Scenario, SinePulse
 
 __all__ = ["NewtonEngine", "NewtonSettings", "prism_mesh"]
@@ -93,6 +99,33 @@ def _libs() -> tuple[Any, Any]:
     # the module-load lines and the init banner go to stdout: keep the CLI's clean
     wp.config.log_level = wp.LOG_WARNING
     return wp, NewtonEngine.library("newton")
+
+
+def _pose_3d(wp: Any, state: np.ndarray) -> Any:
+    """A body's transform at a 3D state of :meth:`Scenario.initial_states`.
+
+    ``state`` is (x, y, z, w, qx, qy, qz, vx, vy, vz, ωx, ωy, ωz) in world axes; Warp's
+    quaternions are (x, y, z, w).
+    """
+    x, y, z, qw, qx, qy, qz = (float(v) for v in state[:7])
+    return wp.transform(wp.vec3(x, y, z), wp.quat(qx, qy, qz, qw))
+
+
+def _set_velocity(wp: Any, builder: Any, body: int, state: np.ndarray) -> None:
+    """Give a free body (just added by ``add_body``) the velocities of a 3D state.
+
+    Newton's ``body_qd`` is (linear, angular) in world axes, the linear part the
+    velocity of the centre of mass, which is the body's origin here, as the state's.
+    The body's free joint (the builder's last) gets the same: a FREE joint's
+    ``joint_qd`` is the child's centre-of-mass velocity and angular velocity in the
+    parent's frame, the world's (the joint-space solvers start from it).
+    """
+    v = [float(c) for c in state[7:13]]
+    builder.body_qd[body] = wp.spatial_vector(*v)
+    joint = builder.joint_count - 1
+    assert builder.joint_child[joint] == body
+    start = builder.joint_qd_start[joint]
+    builder.joint_qd[start:start + 6] = v
 
 
 @dataclass(frozen=True)
@@ -247,7 +280,8 @@ class NewtonEngine(BatchEngine):
     name: ClassVar[str] = "newton"
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
                                                         chamfer=True, assemblies=True,
-                                                        base_axes="xyz")
+                                                        base_axes="xyz", cylinders=True,
+                                                        start3d=True)
     Settings: ClassVar[type[EngineSettings]] = NewtonSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         # calibration: docs/engines/newton.md
@@ -354,6 +388,10 @@ class NewtonEngine(BatchEngine):
             raise UnsupportedScenario(
                 "newton: planar=True joins each block to the base along y, so a base motion "
                 "along y would carry the blocks rigidly; run it with planar=false")
+        if s.planar and any(not sc.planar_start or sc.moving_start for sc in scenarios):
+            raise UnsupportedScenario(
+                "newton: planar=True joins each block to the base in the x–z plane at rest: "
+                "a 3D or moving start needs planar=false")
         wp, newton = _libs()
         out_dt = 1.0 / scenarios[0].output_rate
         # a whole number of steps per output interval lets samples be taken after whole
@@ -439,9 +477,15 @@ class NewtonEngine(BatchEngine):
             base_joint = builder.add_joint_free(child=base, label="base_free")
             joints.append(base_joint)
         base_cfg = shape_cfg(mus[0])
-        builder.add_shape_box(base, xform=wp.transform(wp.vec3(0.0, 0.0, -hz),
-                                                       wp.quat_identity()),
-                              hx=hx, hy=hy, hz=hz, cfg=base_cfg)
+        if scenario.has_cylinders:
+            # the plane z = 0 (infinite): Newton collides a cylinder with a plane by its own
+            # routine (the rim point, the cap's tripod), with a box by GJK and a clipped
+            # manifold, which launched a drum landing on its cap at an oblique azimuth
+            builder.add_shape_plane(body=base, width=0.0, length=0.0, cfg=base_cfg)
+        else:
+            builder.add_shape_box(base, xform=wp.transform(wp.vec3(0.0, 0.0, -hz),
+                                                           wp.quat_identity()),
+                                  hx=hx, hy=hy, hz=hz, cfg=base_cfg)
         for sup in geo.supports:
             self._add_support(newton, wp, builder, base, sup, depth, base_cfg)
         if drive.moving and not s.planar:
@@ -450,10 +494,17 @@ class NewtonEngine(BatchEngine):
 
         first = builder.body_count
         dof = newton.ModelBuilder.JointDofConfig
+        # a start in the x–z plane at rest is placed from its (x, z, angle) poses, as
+        # always (bit-identical planar runs); any other from its 3D states
+        in_plane = scenario.initial_azimuth == 0.0 and not scenario.moving_start
+        states = scenario.initial_states()
         for i, (blk, (cx, cz, th)) in enumerate(zip(blocks, scenario.initial_poses(),
                                                    strict=True)):
-            q = wp.quat_from_axis_angle(wp.vec3(0.0, 1.0, 0.0), float(th))
-            pose = wp.transform(wp.vec3(float(cx), 0.0, float(cz)), q)
+            if in_plane:
+                q = wp.quat_from_axis_angle(wp.vec3(0.0, 1.0, 0.0), float(th))
+                pose = wp.transform(wp.vec3(float(cx), 0.0, float(cz)), q)
+            else:
+                pose = _pose_3d(wp, states[i])
             inertia = wp.mat33(*np.asarray(blk.inertia_tensor, float).ravel().tolist())
             if s.planar:
                 # x, z and the rotation about y relative to the base, from the block's pose
@@ -467,8 +518,14 @@ class NewtonEngine(BatchEngine):
             else:
                 body = builder.add_body(xform=pose, mass=float(blk.m), inertia=inertia,
                                         lock_inertia=True, label=f"block{i}")
+                if not in_plane:
+                    _set_velocity(wp, builder, body, states[i])
             cfg = shape_cfg(mus[i + 1])
-            if isinstance(blk, Block) and (blk.chamfer == 0 or s.chamfer_shape == "box"):
+            if isinstance(blk, Cylinder):
+                # Newton's cylinder: its axis along the body's z, as the Cylinder's
+                builder.add_shape_cylinder(body, radius=float(blk.radius),
+                                           half_height=float(blk.h), cfg=cfg)
+            elif isinstance(blk, Block) and (blk.chamfer == 0 or s.chamfer_shape == "box"):
                 # a chamfered block as the box spanning its flat faces: its pivots exactly
                 builder.add_shape_box(body, hx=blk.pivot_half_width, hy=0.5 * blk.depth,
                                       hz=blk.h, cfg=cfg)
