@@ -129,8 +129,7 @@ def _table(result: References3DResult) -> Table:
         finer = result.finer(r) if r.rung == 0 else None
         conv = r.converged(finer) if finer is not None else None
         fail = Cell("") if not r.failures else table.status_cell(
-            "unsupported" if "unsupported" in r.failures[0] else "crashed",
-            "; ".join(r.failures), r.label)
+            r.failures[0].status.value, "; ".join(map(str, r.failures)), r.label)
         table.add_row([Cell(r.label, kind="head"), str(r.rung), _pct(r.drum_impact),
                        _pct(r.corner_landing), _g(r.off_diagonal), _g(r.tilt_drift),
                        _pct(r.rate_error), _g(r.cpu_per_s),
@@ -152,7 +151,7 @@ def _write_csv(result: References3DResult, path: Path) -> Path:
                         r.corner_landing, r.off_diagonal, r.tilt_drift, r.rate_error,
                         r.cpu_per_s, "" if conv is None else conv,
                         "" if r.within_bounds() is None else r.within_bounds(),
-                        "; ".join(r.failures)])
+                        "; ".join(map(str, r.failures))])
     return path
 
 

@@ -19,7 +19,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -45,9 +45,19 @@ from rockbench.trajectory import Status, Trajectory
 
 __all__ = ["DRUM", "SLENDER_CYLINDER", "PILLAR", "PRECESSION_TILT", "drum_release",
            "corner_release", "precession", "corner_landing_time", "first_zero", "Errors3D",
-           "errors",
-           "rim_contact", "References3DOptions", "References3DResult", "run_references_3d",
-           "KIND", "TIMING_TOLERANCE", "DRIFT_TOLERANCE", "BOUNDS"]
+           "Failure", "errors", "rim_contact", "References3DOptions", "References3DResult",
+           "run_references_3d", "KIND", "TIMING_TOLERANCE", "DRIFT_TOLERANCE", "BOUNDS"]
+
+class Failure(NamedTuple):
+    """A run of the study that did not end ``ok``: its scene, status and the reason."""
+
+    scene: str
+    status: Status
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.scene}: {self.status} ({self.message})"
+
 
 @dataclass(frozen=True)
 class Errors3D:
@@ -73,8 +83,8 @@ class Errors3D:
         Relative error of the mean precession rate.
     cpu_per_s : float
         CPU seconds per simulated second of the precession.
-    failures : tuple of str
-        The runs whose status was not ``ok``, with the engine's message.
+    failures : tuple of Failure
+        The runs whose status was not ``ok``.
     precession : Trajectory or None
         The precession run (for the figures).
     """
@@ -88,7 +98,7 @@ class Errors3D:
     tilt_drift: float
     rate_error: float
     cpu_per_s: float
-    failures: tuple[str, ...]
+    failures: tuple[Failure, ...]
     precession: Trajectory | None = None
 
     def converged(self, finer: Errors3D) -> bool | None:
@@ -128,7 +138,7 @@ DRIFT_TOLERANCE = 2e-4
 
 def errors(method: Method, label: str, rung: int, drum: Trajectory | None,
            corner: Trajectory | None, spinning: Trajectory | None,
-           failures: tuple[str, ...] = ()) -> Errors3D:
+           failures: tuple[Failure, ...] = ()) -> Errors3D:
     """The errors of one method's three runs (None: a run that failed)."""
     nan = math.nan
     d_ref = drum_release()
@@ -270,15 +280,15 @@ def run_references_3d(opts: References3DOptions,
     rows = []
     for k, (m, label, rung) in enumerate(planned):
         got: list[Trajectory | None] = []
-        failures: list[str] = []
+        failures: list[Failure] = []
         for run, res in zip(runs[3 * k:3 * k + 3], campaign.results[3 * k:3 * k + 3],
                             strict=True):
             traj = campaign.trajectories.get(run.key)
             ok = res.metrics.status is Status.OK and traj is not None
             got.append(traj if ok else None)
             if not ok:
-                failures.append(f"{run.scenario.name}: {res.metrics.status} "
-                                f"({res.metrics.message})")
+                failures.append(Failure(run.scenario.name, res.metrics.status,
+                                        res.metrics.message))
         rows.append(errors(m, label, rung, got[0], got[1], got[2], tuple(failures)))
     return References3DResult(opts, tuple(rows), campaign.versions, campaign.ran,
                               campaign.reused, time.perf_counter() - start)
