@@ -7,8 +7,9 @@ Examples::
 
 Runs three scenes with a closed-form answer that no planar case shows (a drum rocking on
 its rim, a pillar rocking on a corner along its diagonal, a slender cylinder in steady
-precession) on the analytic reference and every engine that builds cylinders and 3D
-starts, at each preset's time step and halved. Writes DIR/index.html, DIR/report.md,
+precession) on the analytic reference and every engine that builds cylinders or 3D
+starts (what it cannot build is reported ``unsupported``), at each preset's time step and
+halved. Writes DIR/index.html, DIR/report.md,
 DIR/references-3d.csv and DIR/figures/ (:mod:`rockbench.report.references_3d_report`);
 every run is recorded in the results store with its trajectory, so ``--resume`` redraws
 it.
@@ -69,8 +70,8 @@ def execute_references_3d(args: argparse.Namespace) -> int:
         raise RockbenchError("--preset names no preset")
     chosen = selected_engines(args.engine)
     # engines that build neither cylinders nor 3D starts would only report "unsupported"
-    engines = [e for e in chosen if e != "analytic" and engine_class(e).capabilities.cylinders
-               and engine_class(e).capabilities.start3d]
+    engines = [e for e in chosen if e != "analytic" and (
+        engine_class(e).capabilities.cylinders or engine_class(e).capabilities.start3d)]
     skipped = sorted(set(chosen) - set(engines) - {"analytic"})
     settings = engine_settings(argparse.Namespace(**{**vars(args), "preset": None}), engines)
     out = Path(args.out)

@@ -45,7 +45,7 @@ class AnalyticEngine(Engine):
     name: ClassVar[str] = "analytic"
     capabilities: ClassVar[Capabilities] = Capabilities(
         dimensions=2, max_blocks=2, analytic=True, base_axes="xyz", cylinders=True,
-        start3d=True,
+        start3d=True, moving_start=True,
         no_assemblies="no dynamic closed form exists; an assembly's reference is its "
                       "limit-analysis collapse factor (rockbench collapse)")
     Settings: ClassVar[type[EngineSettings]] = AnalyticSettings

@@ -41,8 +41,8 @@ Contract for implementers (the numbered rules that every plugin follows)
    centre of gravity and angle at ``scenario.initial_poses()[i]``, at rest.
    Declare ``Capabilities.cylinders`` only where a
    :class:`~rockbench.geometry.Cylinder` is built as a cylinder, and
-   ``Capabilities.start3d`` only where the 3D pose and velocities of
-   ``scenario.initial_states()[i]`` are applied (world axes). Return the
+   ``Capabilities.start3d`` and ``moving_start`` only where the 3D pose and the
+   velocities of ``scenario.initial_states()[i]`` are applied (world axes). Return the
    physics time step actually used.
 4. Apply the base motion: :attr:`drive` (a :class:`~rockbench.engines.drive.BaseDrive`,
    set before :meth:`_build`) samples the scenario's three-component motion on
@@ -216,10 +216,13 @@ class Capabilities:
         cylinders (without it they are ``unsupported``: a box in their place
         would be another body).
     start3d : bool
-        Whether it places bodies at the 3D start of
+        Whether it places bodies at the 3D pose of
         :meth:`~rockbench.scenarios.Scenario.initial_states` (a tilt toward any
-        azimuth, initial velocities); without it a scenario that has one is
-        ``unsupported``.
+        azimuth); without it a start out of the x–z plane is ``unsupported``.
+    moving_start : bool
+        Whether it gives bodies the initial velocities of
+        :meth:`~rockbench.scenarios.Scenario.initial_states`; without it a
+        moving start is ``unsupported``.
     """
 
     dimensions: int = 3
@@ -233,6 +236,7 @@ class Capabilities:
     base_axes: str = "x"
     cylinders: bool = False
     start3d: bool = False
+    moving_start: bool = False
 
 
 class Engine(ABC):
@@ -376,10 +380,12 @@ class Engine(ABC):
                 f"{self.name} builds only blocks standing on each other: {cap.no_assemblies}")
         if scenario.has_cylinders and not cap.cylinders:
             raise UnsupportedScenario(f"{self.name} does not build cylinders")
-        if not cap.start3d and (scenario.moving_start or not scenario.planar_start):
-            raise UnsupportedScenario(
-                f"{self.name} starts bodies at rest in the x–z plane only; this scenario "
-                f"starts them {'moving' if scenario.moving_start else 'tilted out of it'}")
+        if not cap.start3d and not scenario.planar_start:
+            raise UnsupportedScenario(f"{self.name} starts bodies in the x–z plane only; this "
+                                      "scenario starts them out of it")
+        if not cap.moving_start and scenario.moving_start:
+            raise UnsupportedScenario(f"{self.name} starts bodies at rest only; this scenario "
+                                      "starts them moving")
         if not cap.prisms and not all(isinstance(b, (Block, Cylinder)) for b in scenario.blocks):
             raise UnsupportedScenario(
                 f"{self.name} builds rectangular blocks only: {cap.no_prisms}")

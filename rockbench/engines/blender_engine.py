@@ -194,7 +194,7 @@ class BlenderEngine(Engine):
     name: ClassVar[str] = "blender"
     capabilities: ClassVar[Capabilities] = Capabilities(
         dimensions=3, max_blocks=None, chamfer=True, assemblies=True, prisms=False,
-        base_axes="xyz", cylinders=True,
+        base_axes="xyz", cylinders=True, start3d=True,
         no_prisms=("Bullet gives a convex hull the inertia of its bounding box and bpy exposes "
                    "no inertia (a voussoir of arch-9v-t0.15 would get +16 to +70 % about y), "
                    "and hulls not symmetric about their centroid explode at the first step in "
@@ -401,9 +401,13 @@ class BlenderEngine(Engine):
             m = s.collision_margin if s.use_margin and shape != "BOX" else 0.0
             ob = _prism(bpy, scene, f"block{i}", _offset_polygon(blk.profile(), m),
                         0.5 * blk.depth - m)
-            ob.location = (float(cx), 0.0, float(cz))
             ob.rotation_mode = "QUATERNION"
-            ob.rotation_quaternion = (math.cos(0.5 * a), 0.0, math.sin(0.5 * a), 0.0)
+            if scenario.initial_azimuth == 0.0:
+                ob.location = (float(cx), 0.0, float(cz))
+                ob.rotation_quaternion = (math.cos(0.5 * a), 0.0, math.sin(0.5 * a), 0.0)
+            else:  # tilted toward an azimuth: a column's block (its frame is the block's)
+                ob.location = tuple(states[i, :3].tolist())
+                ob.rotation_quaternion = tuple(states[i, 3:7].tolist())
             _rigid_body(bpy, ob, s, type_="ACTIVE", shape=shape, mass=blk.m, friction=mu,
                         restitution=e, kinematic=False)
             self._blocks.append(ob)

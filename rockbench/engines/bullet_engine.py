@@ -208,7 +208,7 @@ class BulletEngine(Engine):
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
                                                          chamfer=True, assemblies=True,
                                                          base_axes="xyz", cylinders=True,
-                                                         start3d=True)
+                                                         start3d=True, moving_start=True)
     Settings: ClassVar[type[EngineSettings]] = BulletSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         # 0.1 ms steps (fps 1000 × 10 sub-steps), every solver pass run: ≤ 5e-3 λ on the

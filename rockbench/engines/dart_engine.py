@@ -207,7 +207,7 @@ class DartEngine(Engine):
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
                                                         chamfer=True, assemblies=True,
                                                         base_axes="xyz", cylinders=True,
-                                                        start3d=True)
+                                                        start3d=True, moving_start=True)
     Settings: ClassVar[type[EngineSettings]] = DartSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {"timestep": 2.5e-5, "collision_detector": "fcl"},

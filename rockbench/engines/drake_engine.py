@@ -321,7 +321,7 @@ class DrakeEngine(Engine):
     name: ClassVar[str] = "drake"
     capabilities: ClassVar[Capabilities] = Capabilities(
         dimensions=3, max_blocks=None, chamfer=True, assemblies=True, base_axes="xyz",
-        cylinders=True, start3d=True)
+        cylinders=True, start3d=True, moving_start=True)
     Settings: ClassVar[type[EngineSettings]] = DrakeSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "accurate": {},

@@ -204,7 +204,7 @@ class RapierEngine(Engine):
     capabilities: ClassVar[Capabilities] = Capabilities(dimensions=3, max_blocks=None,
                                                         chamfer=True, assemblies=True,
                                                         base_axes="xyz", cylinders=True,
-                                                        start3d=True)
+                                                        start3d=True, moving_start=True)
     Settings: ClassVar[type[EngineSettings]] = RapierSettings
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         # calibration: docs/engines/rapier.md

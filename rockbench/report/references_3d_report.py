@@ -156,21 +156,30 @@ def _write_csv(result: References3DResult, path: Path) -> Path:
 
 
 def summary(result: References3DResult) -> list[str]:
-    """One sentence each: which methods are within the bounds and converge, which not."""
+    """One sentence each: which methods are within the bounds and converge, which not, and
+    which could not run every scene."""
     good: list[str] = []
     bad: list[str] = []
+    partial: list[str] = []
     for r in result.rows:
         if r.rung or r.method.is_reference:
             continue
         finer = result.finer(r)
-        ok = r.within_bounds() and (finer is None or r.converged(finer))
-        (good if ok else bad).append(r.label)
+        if r.within_bounds() is None:
+            failed = sorted({f"{f.scene} {f.status}" for f in r.failures})
+            partial.append(f"{r.label} ({', '.join(failed)})")
+        elif r.within_bounds() and (finer is None or r.converged(finer)):
+            good.append(r.label)
+        else:
+            bad.append(r.label)
     out = []
     if good:
         out.append(f"Within the bounds{' and converged' if result.options.converge else ''}: "
                    f"{', '.join(good)}.")
     if bad:
         out.append(f"Not: {', '.join(bad)} (Table 1 says which error and why).")
+    if partial:
+        out.append(f"Not every scene ran: {'; '.join(partial)}.")
     return out
 
 
