@@ -12,9 +12,15 @@ from engine_helpers import (
     SINGLE2,
     check_arch_rides_its_supports,
     check_assembly_stays_at_rest,
+    check_base_drives_y_and_z,
     check_base_follows_excitation,
+    check_corner_release,
+    check_cylinder_rocks_like_housner,
+    check_rides_a_base_along_y,
+    check_rocks_about_x_like_housner,
     check_sine_pulse_peak,
     check_stack_follows_two_block,
+    check_steady_precession,
     check_tilting_table,
     inclined_scene,
     lam,
@@ -25,13 +31,16 @@ from rockbench.engines.drive import BaseDrive
 from rockbench.engines.lmgc90_engine import (
     Lmgc90Engine,
     Lmgc90Settings,
+    _cylinder,
+    _polyhedron_volume,
     _quaternions,
     _velocity_table,
 )
 from rockbench.engines.settings import SettingsError
 from rockbench.errors import EngineUnavailable
+from rockbench.geometry import Cylinder
 from rockbench.metrics import impact_times
-from rockbench.scenarios import Block, Contact, Scenario, SinePulse, get_scenario
+from rockbench.scenarios import Block, Components, Contact, Scenario, SinePulse, get_scenario
 from rockbench.trajectory import Status, Trajectory
 
 
@@ -48,7 +57,8 @@ def test_presets_and_knobs() -> None:
     assert Lmgc90Engine.settings("accurate") == Lmgc90Settings()
     assert Lmgc90Engine.settings("fast").timestep == pytest.approx(1e-3)
     for bad in ({"timestep": 0.0}, {"theta": 0.4}, {"theta": 1.5}, {"alert": -1.0},
-                {"f2f_tol": 0.0}, {"f2f_tol": 1.5}, {"law": "IQS_CLB"}):
+                {"f2f_tol": 0.0}, {"f2f_tol": 1.5}, {"cylinder_facets": 7},
+                {"cylinder_facets": 6}, {"law": "IQS_CLB"}):
         with pytest.raises(SettingsError):
             Lmgc90Engine.settings(**bad)
 
@@ -279,3 +289,90 @@ def test_tilting_table_onset_matches_the_collapse_factor() -> None:
 def test_stack_follows_the_two_block_solution(engine: Lmgc90Engine, case: str,
                                               tol: float) -> None:
     check_stack_follows_two_block(engine, case, tol, slip=1e-5, gap=2e-5)
+
+
+# ---------------------------------------------------------------- base motion along y and z
+@needs_lmgc90
+def test_base_drives_y_and_z(engine: Lmgc90Engine) -> None:
+    # each moving axis is its own velocity table of the driven base (no planar knob):
+    # measured, rides a vertical pulse within 1.6e-9 m (θ 5.3e-12 rad); dragged along y to
+    # the base's end within 1.2e-10 m, θ 7.6e-10 rad, x 3.8e-10 m
+    check_base_drives_y_and_z(engine, z_tol=3e-9, theta_tol=1.5e-10, drag_tol=8e-10,
+                              planar=False)
+
+
+@needs_lmgc90
+def test_rides_a_base_along_y(engine: Lmgc90Engine) -> None:
+    # measured: y within 2.3e-8 m of the base's, roll 4.5e-8 rad, θ 2.1e-10 rad, x 1.8e-10 m
+    check_rides_a_base_along_y(engine, y_tol=5e-8, still_tol=1e-7)
+
+
+@needs_lmgc90
+def test_rocks_about_x_like_housner(engine: Lmgc90Engine) -> None:
+    # measured: peak roll −0.45 % of Housner's, roll + θ_ref within 0.0053 λ, θ and x 2.6e-7
+    check_rocks_about_x_like_housner(engine, shape_tol=0.01, plane_tol=5e-7)
+
+
+def test_velocity_table_along_each_axis() -> None:
+    pulse = SinePulse(5.0, 0.004)
+    sc = Scenario("yz", SINGLE2, excitation=Components(y=pulse, z=SinePulse(4.0, 0.002)),
+                  duration=0.5)
+    drive = BaseDrive(sc.motion, sc.duration)
+    for axis, exc in ((1, pulse), (2, SinePulse(4.0, 0.002))):
+        t, v = _velocity_table(drive, sc.duration, 1e-3, axis=axis)
+        during = t <= exc.end_time
+        np.testing.assert_allclose(v[during], exc.velocity(t[during]), rtol=0, atol=1e-15)
+    t, v = _velocity_table(drive, sc.duration, 1e-3)  # x does not move
+    assert np.all(v == 0.0)
+
+
+# ---------------------------------------------------------------- cylinders and 3D starts
+def test_faceted_cylinder() -> None:
+    # the prism on a regular n-gon inscribed in the circle: its volume, outward faces
+    for n in (8, 64):
+        v, faces = _cylinder(0.3, 0.75, n)
+        area = 0.5 * n * 0.3**2 * math.sin(2 * math.pi / n)
+        assert _polyhedron_volume(v, faces) == pytest.approx(area * 1.5, rel=1e-12)
+        assert np.allclose(np.hypot(v[:, 0], v[:, 1]), 0.3)
+        assert v[0, 0] == pytest.approx(0.3) and v[0, 1] == 0.0  # a vertex at azimuth 0
+
+
+@needs_lmgc90
+def test_cylinder_is_built_as_a_cylinder(engine: Lmgc90Engine) -> None:
+    # the drum stands at rest on its end face: z = H/2 and no turn (not a 2R × 2R box,
+    # whose centre would be at R)
+    cyl = Cylinder(0.15, 1.0, density=2000.0)
+    tr = engine.simulate(Scenario("rest", cyl, duration=0.2), "fast")
+    assert tr.status is Status.OK
+    np.testing.assert_allclose(tr.z[:, 0], cyl.h, atol=1e-8)
+    assert np.max(np.abs(tr.tilt)) < 1e-9
+    assert np.max(np.abs(tr.x)) < 1e-9 and np.max(np.abs(tr.y)) < 1e-9
+
+
+# Measured (docs/engines/lmgc90.md, "Cylinders and 3D starts"): the drum's rim is a 64-gon
+# with a vertex at azimuth 0, on which the in-plane release pivots.
+@needs_lmgc90
+@pytest.mark.parametrize(("preset", "rel", "plane_tol"), [
+    ("fast", 8e-3, 6e-6),  # measured: first impact +0.41 %, roll 1.9e-7, twist 2.7e-6 rad
+    pytest.param("accurate", 8e-3, 2e-5, marks=pytest.mark.slow),  # +0.40 %, 8.8e-7, 9.7e-6
+])
+def test_cylinder_rocks_like_housner(engine: Lmgc90Engine, preset: str, rel: float,
+                                     plane_tol: float) -> None:
+    # θ within 0.0041 λ of the reference up to the impact at both presets
+    check_cylinder_rocks_like_housner(engine, preset, rel=rel, plane_tol=plane_tol)
+
+
+@needs_lmgc90
+@pytest.mark.parametrize(("preset", "rel", "diagonal_tol"), [
+    ("fast", 3e-4, 1e-6),       # measured: landing +0.016 %, |θ + roll| 5.2e-7 rad
+    ("accurate", 8e-5, 8e-8),   # measured: landing +0.0036 %, |θ + roll| 3.7e-8 rad
+])
+def test_corner_release(engine: Lmgc90Engine, preset: str, rel: float,
+                        diagonal_tol: float) -> None:
+    check_corner_release(engine, preset, rel=rel, diagonal_tol=diagonal_tol)
+
+
+@needs_lmgc90
+def test_steady_precession_fast(engine: Lmgc90Engine) -> None:
+    # measured over 2 s at fast: tilt within 0.0196 rad of 0.2, rate −2.0 % of Ω
+    check_steady_precession(engine, "fast", tilt_tol=0.03, rate_rtol=0.035)
