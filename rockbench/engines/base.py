@@ -379,7 +379,9 @@ class Engine(ABC):
             raise UnsupportedScenario(
                 f"{self.name} builds only blocks standing on each other: {cap.no_assemblies}")
         if scenario.has_cylinders and not cap.cylinders:
-            raise UnsupportedScenario(f"{self.name} does not build cylinders")
+            why = " (a planar engine: a box of the cylinder's silhouette would be another body)" \
+                if cap.dimensions == 2 else ""
+            raise UnsupportedScenario(f"{self.name} does not build cylinders{why}")
         if not cap.start3d and not scenario.planar_start:
             raise UnsupportedScenario(f"{self.name} starts bodies in the x–z plane only; this "
                                       "scenario starts them out of it")
