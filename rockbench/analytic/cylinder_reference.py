@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from rockbench.analytic.rolling_cylinder import RollingOutcome, solve_rolling
+from rockbench.analytic.rolling_cylinder import RollingOutcome, euler_rates, frame, solve_rolling
 from rockbench.errors import UnsupportedScenario
 from rockbench.geometry import Cylinder
 from rockbench.scenarios import Scenario
@@ -44,14 +44,6 @@ class RollingStart(NamedTuple):
     initial_azimuth: float
     initial_velocity: tuple[float, float, float]
     initial_angular_velocity: tuple[float, float, float]
-
-
-def _frame(theta: float, psi: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Lean direction u, line of nodes a₁ = ẑ × u, a₂ = e₃ × a₁ and the axis e₃."""
-    u = np.array([math.cos(psi), math.sin(psi), 0.0])
-    a1 = np.array([-u[1], u[0], 0.0])
-    e3 = math.cos(theta) * np.array([0.0, 0.0, 1.0]) + math.sin(theta) * u
-    return u, a1, np.cross(e3, a1), e3
 
 
 def rolling_start(cylinder: Cylinder, theta: float, psi: float = 0.0, theta_dot: float = 0.0,
@@ -81,7 +73,7 @@ def rolling_start(cylinder: Cylinder, theta: float, psi: float = 0.0, theta_dot:
     if not 0.0 < theta < lam:
         raise UnsupportedScenario(f"a rolling start leans on its rim: 0 < tilt < λ = "
                                   f"{lam:.6g} rad, got {theta!r}")
-    _, a1, a2, e3 = _frame(theta, psi)
+    _, a1, a2, e3 = frame(theta, psi)
     w = theta_dot * a1 + psi_dot * math.sin(theta) * a2 \
         + (psi_dot * math.cos(theta) + phi_dot) * e3
     v = np.cross(w, cylinder.radius * a2 + cylinder.h * e3)
@@ -111,7 +103,7 @@ def rolling_reference(scenario: Scenario) -> Trajectory:
     theta = abs(scenario.theta0)
     u_xy = st[:2] - np.array([scenario.geometry.poses[0][0], 0.0])
     psi = math.atan2(u_xy[1], u_xy[0])
-    u, a1, a2, e3 = _frame(theta, psi)
+    u, a1, a2, e3 = frame(theta, psi)
     contact = np.array([scenario.geometry.poses[0][0], 0.0, 0.0]) + body.radius * u
     w, v = st[10:13], st[7:10]
     slip = np.linalg.norm(v - np.cross(w, st[:3] - contact))
@@ -120,11 +112,12 @@ def rolling_reference(scenario: Scenario) -> Trajectory:
             f"the rolling reference starts rolling without slipping: the initial velocity "
             f"differs from ω × (G − P) by {slip:.3g} m/s")
     w1, w2, w3 = float(w @ a1), float(w @ a2), float(w @ e3)
+    psi_dot, phi_dot = euler_rates(theta, w2, w3)
     motion = scenario.motion
     planar = scenario.planar_start and "y" not in motion.axes
     start, cpu = time.perf_counter(), time.process_time()
     sol = solve_rolling(
-        body, theta, psi, w1, w2 / math.sin(theta), w3 - w2 / math.tan(theta),
+        body, theta, psi, w1, float(psi_dot), float(phi_dot),
         scenario.duration, phi0=-psi, contact0=(float(contact[0]), float(contact[1])),
         g=scenario.g,
         base_acceleration=None if motion.is_free else lambda t: motion.acceleration(t).tolist(),

@@ -86,7 +86,7 @@ from rockbench.geometry import Cylinder
 __all__ = [
     "Cylinder", "RollingState", "RollingEvent", "RollingSolution", "RollingOutcome",
     "EventKind", "SteadyPrecession", "BaseAcceleration", "solve_rolling",
-    "steady_precession", "energy",
+    "steady_precession", "energy", "frame", "euler_rates",
 ]
 
 #: Base acceleration (a_x, a_y) or (a_x, a_y, a_z) in m/s² at time t (s).
@@ -440,7 +440,17 @@ def _base(base_acceleration: BaseAcceleration | None) -> Callable[[float], tuple
     return acc
 
 
-def _rates(theta: Any, w2: Any, w3: Any) -> tuple[Any, Any]:
+def frame(theta: float, psi: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The lean direction u and the frame a₁ = n = ẑ × u, a₂ = e₃ × n, a₃ = e₃ (world axes)
+    of the cylinder tilted by θ toward the azimuth ψ."""
+    s, co = math.sin(theta), math.cos(theta)
+    u = np.array([math.cos(psi), math.sin(psi), 0.0])
+    n = np.array([-u[1], u[0], 0.0])
+    zz = np.array([0.0, 0.0, 1.0])
+    return u, n, -co * u + s * zz, s * u + co * zz
+
+
+def euler_rates(theta: Any, w2: Any, w3: Any) -> tuple[Any, Any]:
     """ψ̇ = w₂ / sin θ and φ̇ = w₃ − w₂ cot θ; at θ = 0 with w₂ = 0: ψ̇ = 0, φ̇ = w₃.
 
     At θ = 0 only ψ̇ + φ̇ = w₃ is defined (ψ̇ → ∞ as the cylinder lands while precessing).
@@ -457,12 +467,10 @@ def _state(c: Cylinder, t: float, y: np.ndarray) -> RollingState:
     th, ps = float(y[0]), float(y[1])
     s, co = math.sin(th), math.cos(th)
     off = c.h * s - c.radius * co      # horizontal offset of G from P along u
-    psi_dot, phi_dot = _rates(th, float(y[4]), float(y[5]))
+    psi_dot, phi_dot = euler_rates(th, float(y[4]), float(y[5]))
     w1, w2, w3 = float(y[3]), float(y[4]), float(y[5])
-    u = np.array([math.cos(ps), math.sin(ps), 0.0])
-    n = np.array([-math.sin(ps), math.cos(ps), 0.0])
-    zz = np.array([0.0, 0.0, 1.0])
-    omega = w1 * n + w2 * (-co * u + s * zz) + w3 * (s * u + co * zz)
+    _, a1, a2, a3 = frame(th, ps)
+    omega = w1 * a1 + w2 * a2 + w3 * a3
     return RollingState(
         t=float(t), theta=th, psi=ps, phi=float(y[2]), theta_dot=w1,
         psi_dot=float(psi_dot), phi_dot=float(phi_dot),
@@ -675,7 +683,7 @@ def solve_rolling(
     t, st = tt[keep], out[:, keep]
     th, ps = st[0], st[1]
     off = c.h * np.sin(th) - c.radius * np.cos(th)
-    psi_dot, phi_dot = _rates(th, st[4], st[5])
+    psi_dot, phi_dot = euler_rates(th, st[4], st[5])
     acc_t = np.array([acc(float(ti)) for ti in t]).reshape(-1, 3).T
     dyn = _dynamics(c, st, g + acc_t[2], acc_t[0], acc_t[1])
     kin = 0.5 * c.m * dyn[10] + 0.5 * (c.i_transverse * (st[3] ** 2 + st[4] ** 2)
