@@ -23,7 +23,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from rockbench.analytic import reference
+from rockbench.analytic import SteadyPrecession, reference
 from rockbench.analytic.cases_3d import (
     DRUM,
     PILLAR,
@@ -45,8 +45,10 @@ from rockbench.trajectory import Status, Trajectory
 
 __all__ = ["DRUM", "SLENDER_CYLINDER", "PILLAR", "PRECESSION_TILT", "drum_release",
            "corner_release", "precession", "corner_landing_time", "first_zero", "Errors3D",
-           "Failure", "errors", "rim_contact", "References3DOptions", "References3DResult",
-           "run_references_3d", "KIND", "TIMING_TOLERANCE", "DRIFT_TOLERANCE", "BOUNDS"]
+           "Failure", "Targets", "targets", "errors", "rim_contact", "References3DOptions",
+           "References3DResult", "run_references_3d", "KIND", "TIMING_TOLERANCE",
+           "DRIFT_TOLERANCE", "BOUNDS"]
+
 
 class Failure(NamedTuple):
     """A run of the study that did not end ``ok``: its scene, status and the reason."""
@@ -136,25 +138,40 @@ TIMING_TOLERANCE = 1e-3
 DRIFT_TOLERANCE = 2e-4
 
 
+class Targets(NamedTuple):
+    """What the three scenes should give: the drum's first impact and the pillar's landing
+    (s), and the steady precession."""
+
+    drum_impact: float
+    landing: float
+    precession: SteadyPrecession
+
+
+def targets() -> Targets:
+    """The closed forms of the three scenes (the drum's impact from Housner's reference)."""
+    ref = reference(drum_release())
+    corner = corner_release()
+    return Targets(first_zero(ref.t, ref.theta[:, 0]),
+                   corner_landing_time(PILLAR, corner.theta0, corner.g), precession()[1])
+
+
 def errors(method: Method, label: str, rung: int, drum: Trajectory | None,
            corner: Trajectory | None, spinning: Trajectory | None,
-           failures: tuple[Failure, ...] = ()) -> Errors3D:
-    """The errors of one method's three runs (None: a run that failed)."""
+           failures: tuple[Failure, ...] = (), goal: Targets | None = None) -> Errors3D:
+    """The errors of one method's three runs (None: a run that failed) against ``goal``
+    (default: :func:`targets`)."""
+    goal = goal or targets()
     nan = math.nan
-    d_ref = drum_release()
-    ref = reference(d_ref)
     drum_err = (nan if drum is None else
-                first_zero(drum.t, drum.theta[:, 0]) / first_zero(ref.t, ref.theta[:, 0]) - 1)
-    c_ref = corner_release()
-    t_land = corner_landing_time(PILLAR, c_ref.theta0, c_ref.g)
+                first_zero(drum.t, drum.theta[:, 0]) / goal.drum_impact - 1)
     land_err = off = nan
     if corner is not None:
-        land_err = first_zero(corner.t, corner.theta[:, 0]) / t_land - 1.0
-        before = corner.t < 0.95 * t_land
+        land_err = first_zero(corner.t, corner.theta[:, 0]) / goal.landing - 1.0
+        before = corner.t < 0.95 * goal.landing
         off = float(np.max(np.abs(corner.theta[before, 0] + corner.roll[before, 0])))
     drift = rate = cost = nan
     if spinning is not None:
-        _, sp = precession()
+        sp = goal.precession
         drift = float(np.max(np.abs(spinning.tilt[:, 0] - sp.theta)))
         az = np.unwrap(spinning.azimuth[:, 0])
         rate = float((az[-1] - az[0]) / (spinning.t[-1] - spinning.t[0]) / sp.psi_dot - 1.0)
@@ -277,6 +294,7 @@ def run_references_3d(opts: References3DOptions,
     campaign = run_campaign(runs, CampaignOptions(
         kind=KIND, suite=KIND, db=opts.db, resume=opts.resume, archive=opts.db is not None,
         keep=True, execution=opts.execution, references=False), progress=progress)
+    goal = targets()
     rows = []
     for k, (m, label, rung) in enumerate(planned):
         got: list[Trajectory | None] = []
@@ -289,6 +307,6 @@ def run_references_3d(opts: References3DOptions,
             if not ok:
                 failures.append(Failure(run.scenario.name, res.metrics.status,
                                         res.metrics.message))
-        rows.append(errors(m, label, rung, got[0], got[1], got[2], tuple(failures)))
+        rows.append(errors(m, label, rung, got[0], got[1], got[2], tuple(failures), goal))
     return References3DResult(opts, tuple(rows), campaign.versions, campaign.ran,
                               campaign.reused, time.perf_counter() - start)
