@@ -346,6 +346,20 @@ def check_cylinder_rocks_like_housner(engine: Engine, settings: Any = "accurate"
     return tr
 
 
+def check_drum_falls_alike_toward_any_azimuth(engine: Engine, *, tilt_tol: float,
+                                              azimuth_tol: float) -> None:
+    """Axisymmetry, which a 2R × 2R box would not have (it would pivot on a corner): the drum
+    released toward 45° or 1 rad tilts as the in-plane release within ``tilt_tol`` and its
+    lean keeps its azimuth within ``azimuth_tol`` (rad) until the impact (``accurate``)."""
+    plane = engine.simulate(drum_release(), "accurate")
+    before = plane.t < 0.95 * first_zero(plane.t, plane.theta[:, 0])
+    for az in (0.25 * math.pi, 1.0):
+        tr = engine.simulate(drum_release().replace(initial_azimuth=az), "accurate")
+        assert tr.status is Status.OK
+        assert np.max(np.abs(tr.tilt[before, 0] - plane.tilt[before, 0])) < tilt_tol
+        assert np.max(np.abs(np.unwrap(tr.azimuth[before, 0]) - az)) < azimuth_tol
+
+
 def check_corner_release(engine: Engine, settings: Any = "accurate", *, rel: float = 0.01,
                          diagonal_tol: float = 1e-3) -> Trajectory:
     """The square pillar released from rest on its corner at 0.5 λ of the diagonal (azimuth
